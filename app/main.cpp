@@ -1,0 +1,33 @@
+// overstep: the single git-style front end. Each subcommand lives in its module's app/ code.
+#include <CLI/CLI.hpp>
+#include <iostream>
+
+#include "overstep/cli/command.hpp"
+#include "overstep/core/error.hpp"
+
+namespace overstep {
+void registerModelCommand(CLI::App& app, cli::Registry& registry);
+}
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "overstep: plans, executes and checks a whole-body humanoid motion stepping over a large\n"
+      "obstacle on an HRP-2-class robot with elastic ankles."};
+  app.require_subcommand(1);
+  app.footer(
+      "Examples:\n"
+      "  overstep model                      # print the HRP-2-class model summary\n"
+      "  overstep model --json               # the same as one JSON object\n"
+      "  overstep <subcommand> --help        # options of one subcommand\n"
+      "Exit codes: 0 ok, 1 internal error, 2 bad input, 3 infeasible request.");
+  overstep::cli::Registry registry;
+  overstep::registerModelCommand(app, registry);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    overstep::cli::printError("", e.what());
+    return overstep::kExitBadInput;
+  }
+  return registry.runSelected();
+}

@@ -1,0 +1,115 @@
+#pragma once
+/// \file
+/// Robot parameters that live beside the URDF in robots/<robot>/<robot>.yaml: joint tables with
+/// limits and actuator data, the passive elastic joints, feet, named frames, collision capsules and
+/// the reference posture. Eigen + yaml-cpp only (no DART): the stabilizer and runtime read it too.
+/// Units: SI (m, kg, s, rad, N, N m).
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace overstep::core {
+
+/// One actuated (position-servoed) joint. Angles in rad.
+struct ActuatedJoint {
+  std::string name;
+  double lower = 0.0;          ///< mechanical lower limit, rad
+  double upper = 0.0;          ///< mechanical upper limit, rad
+  double safety_margin = 0.0;  ///< planner keeps this far inside [lower, upper], rad
+  double velocity = 0.0;       ///< |qdot| limit, rad/s
+  double torque = 0.0;         ///< |tau| limit, N m
+  double gear_ratio = 1.0;     ///< reduction ratio N (motor turns per joint turn)
+  double rotor_inertia = 0.0;  ///< motor-side rotor inertia I_m, kg m^2
+
+  double safeLower() const { return lower + safety_margin; }
+  double safeUpper() const { return upper - safety_margin; }
+  /// Reflected rotor inertia N^2 I_m (seed eq. 4), kg m^2.
+  double reflectedInertia() const { return gear_ratio * gear_ratio * rotor_inertia; }
+};
+
+/// A passive joint driven by a linear spring/damper about rest position 0.
+struct ElasticJoint {
+  std::string name;
+  double stiffness = 0.0;  ///< N m/rad
+  double damping = 0.0;    ///< N m s/rad
+};
+
+/// Sole rectangle in the sole frame, m. "outer" is away from the robot's sagittal plane.
+struct SoleRectangle {
+  double x_front = 0.0;
+  double x_back = 0.0;
+  double y_outer = 0.0;
+  double y_inner = 0.0;
+};
+
+/// A foot: its body, frames and sole.
+struct FootDescription {
+  std::string side;                ///< "right" or "left"
+  std::string link;                ///< foot body below the elastic joint
+  std::string sole_frame;          ///< frame at the ankle projection on the sole plane
+  std::string force_sensor_frame;  ///< 6-axis F/T sensor frame
+  SoleRectangle sole;
+  /// +1 for the left foot, -1 for the right foot (sign of the outer side in y).
+  double sideSign() const { return side == "left" ? 1.0 : -1.0; }
+  /// Sole bounds in the sole frame: y_min, y_max accounting for the side.
+  double yMin() const { return side == "left" ? -sole.y_inner : -sole.y_outer; }
+  double yMax() const { return side == "left" ? sole.y_outer : sole.y_inner; }
+  /// Centre of the sole rectangle in the sole frame (x, y).
+  Eigen::Vector2d centre() const {
+    return {0.5 * (sole.x_front - sole.x_back), 0.5 * (yMin() + yMax())};
+  }
+};
+
+/// A named frame rigidly attached to a link.
+struct FrameDescription {
+  std::string name;
+  std::string link;
+  Eigen::Isometry3d X_LF = Eigen::Isometry3d::Identity();  ///< frame pose in the link frame
+};
+
+/// A collision capsule: segment p0-p1 in the link frame with a radius.
+struct CapsuleDescription {
+  std::string link;
+  Eigen::Vector3d p0 = Eigen::Vector3d::Zero();
+  Eigen::Vector3d p1 = Eigen::Vector3d::Zero();
+  double radius = 0.0;
+};
+
+/// Everything robots/<robot>/<robot>.yaml says. Loaded and validated by loadRobotDescription().
+struct RobotDescription {
+  std::string name;
+  std::string yaml_path;  ///< file this was loaded from
+  std::string urdf_path;  ///< absolute or relative to the working directory
+  std::string base_link;
+  bool floating_base = true;
+  double gravity = 9.81;  ///< m/s^2, along -z
+  std::vector<ActuatedJoint> actuated;
+  std::vector<ElasticJoint> elastic;
+  std::vector<FootDescription> feet;  ///< right first, then left (may be empty)
+  std::vector<FrameDescription> frames;
+  std::vector<CapsuleDescription> capsules;
+  Eigen::VectorXd half_sitting;      ///< actuated joint angles, rad (size = actuated.size())
+  double acceleration_limit = 30.0;  ///< rad/s^2, for planners
+  std::uint64_t content_hash = 0;    ///< FNV-1a of the YAML and URDF file contents
+
+  int actuatedIndex(const std::string& joint) const;           ///< -1 if absent
+  int elasticIndex(const std::string& joint) const;            ///< -1 if absent
+  const FootDescription* foot(const std::string& side) const;  ///< nullptr if absent
+  /// Hex string of content_hash (16 digits).
+  std::string hashHex() const;
+};
+
+/// Loads and validates a robot YAML. Throws InputError with a one-line message naming the file and
+/// the offending key on a missing file, malformed YAML, a missing key or an invalid value
+/// (negative stiffness, inverted limits, half-sitting outside the limits, ...).
+RobotDescription loadRobotDescription(const std::string& yaml_path);
+
+/// 64-bit FNV-1a hash of a byte string (stable across platforms), for content fingerprints.
+std::uint64_t fnv1a64(const std::string& bytes, std::uint64_t seed = 14695981039346656037ULL);
+
+/// Reads a whole file; throws InputError naming the path when it cannot be read.
+std::string readFile(const std::string& path);
+
+}  // namespace overstep::core

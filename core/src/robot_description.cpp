@@ -1,0 +1,293 @@
+#include "overstep/core/robot_description.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "overstep/core/error.hpp"
+
+namespace overstep::core {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+
+  [[noreturn]] void fail(const std::string& key, const std::string& msg) const {
+    throw InputError(file_ + ": " + key + ": " + msg);
+  }
+
+  YAML::Node need(const YAML::Node& node, const std::string& name, const std::string& where) const {
+    YAML::Node child = node[name];
+    if (!child) fail(where.empty() ? name : where + "." + name, "missing key");
+    return child;
+  }
+
+  template <typename T>
+  T as(const YAML::Node& node, const std::string& key) const {
+    try {
+      return node.as<T>();
+    } catch (const YAML::Exception&) {
+      fail(key, "expected a " + typeName<T>() + ", got '" + scalarText(node) + "'");
+    }
+  }
+
+  double number(const YAML::Node& parent, const std::string& name, const std::string& where) const {
+    const std::string key = where.empty() ? name : where + "." + name;
+    const double v = as<double>(need(parent, name, where), key);
+    if (!std::isfinite(v)) fail(key, "expected a finite number, got " + std::to_string(v));
+    return v;
+  }
+
+  double numberOr(const YAML::Node& parent, const std::string& name, const std::string& where,
+                  double fallback) const {
+    return parent[name] ? number(parent, name, where) : fallback;
+  }
+
+  double nonNegative(const YAML::Node& parent, const std::string& name,
+                     const std::string& where) const {
+    const double v = number(parent, name, where);
+    if (v < 0.0) fail(where + "." + name, "expected >= 0, got " + fmt(v));
+    return v;
+  }
+
+  double positive(const YAML::Node& parent, const std::string& name,
+                  const std::string& where) const {
+    const double v = number(parent, name, where);
+    if (!(v > 0.0)) fail(where + "." + name, "expected > 0, got " + fmt(v));
+    return v;
+  }
+
+  Eigen::Vector3d vec3(const YAML::Node& parent, const std::string& name,
+                       const std::string& where) const {
+    const std::string key = where + "." + name;
+    YAML::Node n = need(parent, name, where);
+    if (!n.IsSequence() || n.size() != 3) fail(key, "expected a list of 3 numbers");
+    Eigen::Vector3d v;
+    for (int i = 0; i < 3; ++i) {
+      v(i) = as<double>(n[i], key);
+      if (!std::isfinite(v(i))) fail(key, "expected finite numbers");
+    }
+    return v;
+  }
+
+  static std::string fmt(double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return buf;
+  }
+
+ private:
+  template <typename T>
+  static std::string typeName() {
+    if constexpr (std::is_same_v<T, double>) return "number";
+    if constexpr (std::is_same_v<T, bool>) return "boolean";
+    return "string";
+  }
+  static std::string scalarText(const YAML::Node& n) {
+    if (n.IsScalar()) return n.Scalar();
+    if (n.IsSequence()) return "<list>";
+    if (n.IsMap()) return "<map>";
+    return "<null>";
+  }
+  std::string file_;
+};
+
+}  // namespace
+
+std::uint64_t fnv1a64(const std::string& bytes, std::uint64_t seed) {
+  std::uint64_t h = seed;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 1099511628211ULL;
+  }
+  return h;
+}
+
+std::string readFile(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw InputError(path + ": no such file");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot be read");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+int RobotDescription::actuatedIndex(const std::string& joint) const {
+  for (std::size_t i = 0; i < actuated.size(); ++i)
+    if (actuated[i].name == joint) return static_cast<int>(i);
+  return -1;
+}
+
+int RobotDescription::elasticIndex(const std::string& joint) const {
+  for (std::size_t i = 0; i < elastic.size(); ++i)
+    if (elastic[i].name == joint) return static_cast<int>(i);
+  return -1;
+}
+
+const FootDescription* RobotDescription::foot(const std::string& side) const {
+  for (const auto& f : feet)
+    if (f.side == side) return &f;
+  return nullptr;
+}
+
+std::string RobotDescription::hashHex() const {
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(content_hash));
+  return buf;
+}
+
+RobotDescription loadRobotDescription(const std::string& yaml_path) {
+  const std::string text = readFile(yaml_path);
+  Reader r(yaml_path);
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError(yaml_path + ": malformed YAML at line " + std::to_string(e.mark.line + 1) +
+                     ": " + e.msg);
+  }
+  if (!root.IsMap()) throw InputError(yaml_path + ": expected a YAML map at the top level");
+
+  RobotDescription d;
+  d.yaml_path = yaml_path;
+  d.name = r.as<std::string>(r.need(root, "name", ""), "name");
+  const std::string urdf = r.as<std::string>(r.need(root, "urdf", ""), "urdf");
+  std::filesystem::path up(urdf);
+  if (up.is_relative()) up = std::filesystem::path(yaml_path).parent_path() / up;
+  d.urdf_path = up.lexically_normal().string();
+  d.base_link = r.as<std::string>(r.need(root, "base_link", ""), "base_link");
+  d.floating_base =
+      root["floating_base"] ? r.as<bool>(root["floating_base"], "floating_base") : true;
+  d.gravity = r.numberOr(root, "gravity", "", 9.81);
+  if (!(d.gravity > 0.0)) r.fail("gravity", "expected > 0, got " + Reader::fmt(d.gravity));
+  d.acceleration_limit = r.numberOr(root, "acceleration_limit", "", 30.0);
+
+  const YAML::Node joints = r.need(root, "actuated_joints", "");
+  if (!joints.IsSequence()) r.fail("actuated_joints", "expected a list");
+  for (std::size_t i = 0; i < joints.size(); ++i) {
+    const std::string w = "actuated_joints[" + std::to_string(i) + "]";
+    const YAML::Node j = joints[i];
+    ActuatedJoint a;
+    a.name = r.as<std::string>(r.need(j, "name", w), w + ".name");
+    const YAML::Node lim = r.need(j, "limits_deg", w);
+    if (!lim.IsSequence() || lim.size() != 2) r.fail(w + ".limits_deg", "expected [lower, upper]");
+    a.lower = r.as<double>(lim[0], w + ".limits_deg") * kDeg;
+    a.upper = r.as<double>(lim[1], w + ".limits_deg") * kDeg;
+    if (!(a.lower < a.upper))
+      r.fail(w + ".limits_deg", "expected lower < upper, got [" + Reader::fmt(a.lower / kDeg) +
+                                    ", " + Reader::fmt(a.upper / kDeg) + "]");
+    a.safety_margin = r.nonNegative(j, "safety_margin_deg", w) * kDeg;
+    if (!(a.safeLower() < a.safeUpper()))
+      r.fail(w + ".safety_margin_deg", "margin leaves no range inside the limits");
+    a.velocity = r.positive(j, "velocity", w);
+    a.torque = r.positive(j, "torque", w);
+    a.gear_ratio = r.positive(j, "gear_ratio", w);
+    a.rotor_inertia = r.nonNegative(j, "rotor_inertia", w);
+    if (d.actuatedIndex(a.name) >= 0) r.fail(w + ".name", "duplicate joint '" + a.name + "'");
+    d.actuated.push_back(a);
+  }
+
+  if (const YAML::Node el = root["elastic_joints"]) {
+    if (!el.IsSequence()) r.fail("elastic_joints", "expected a list");
+    for (std::size_t i = 0; i < el.size(); ++i) {
+      const std::string w = "elastic_joints[" + std::to_string(i) + "]";
+      ElasticJoint e;
+      e.name = r.as<std::string>(r.need(el[i], "name", w), w + ".name");
+      e.stiffness = r.nonNegative(el[i], "stiffness", w);
+      e.damping = r.nonNegative(el[i], "damping", w);
+      if (d.elasticIndex(e.name) >= 0 || d.actuatedIndex(e.name) >= 0)
+        r.fail(w + ".name", "duplicate joint '" + e.name + "'");
+      d.elastic.push_back(e);
+    }
+  }
+
+  if (const YAML::Node fr = root["frames"]) {
+    if (!fr.IsSequence()) r.fail("frames", "expected a list");
+    for (std::size_t i = 0; i < fr.size(); ++i) {
+      const std::string w = "frames[" + std::to_string(i) + "]";
+      FrameDescription f;
+      f.name = r.as<std::string>(r.need(fr[i], "name", w), w + ".name");
+      f.link = r.as<std::string>(r.need(fr[i], "link", w), w + ".link");
+      const Eigen::Vector3d xyz = r.vec3(fr[i], "xyz", w);
+      const Eigen::Vector3d rpy = fr[i]["rpy"] ? r.vec3(fr[i], "rpy", w) : Eigen::Vector3d::Zero();
+      f.X_LF.linear() = (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) *
+                         Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
+                         Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
+                            .toRotationMatrix();
+      f.X_LF.translation() = xyz;
+      for (const auto& o : d.frames)
+        if (o.name == f.name) r.fail(w + ".name", "duplicate frame '" + f.name + "'");
+      d.frames.push_back(f);
+    }
+  }
+  auto hasFrame = [&d](const std::string& n) {
+    for (const auto& f : d.frames)
+      if (f.name == n) return true;
+    return false;
+  };
+
+  if (const YAML::Node feet = root["feet"]) {
+    for (const char* side : {"right", "left"}) {
+      const std::string w = std::string("feet.") + side;
+      const YAML::Node f = r.need(feet, side, "feet");
+      FootDescription fd;
+      fd.side = side;
+      fd.link = r.as<std::string>(r.need(f, "link", w), w + ".link");
+      fd.sole_frame = r.as<std::string>(r.need(f, "sole_frame", w), w + ".sole_frame");
+      fd.force_sensor_frame =
+          r.as<std::string>(r.need(f, "force_sensor_frame", w), w + ".force_sensor_frame");
+      for (const auto& fn : {fd.sole_frame, fd.force_sensor_frame})
+        if (!hasFrame(fn)) r.fail(w, "names frame '" + fn + "', which 'frames' does not define");
+      const YAML::Node s = r.need(f, "sole", w);
+      fd.sole.x_front = r.positive(s, "x_front", w + ".sole");
+      fd.sole.x_back = r.positive(s, "x_back", w + ".sole");
+      fd.sole.y_outer = r.positive(s, "y_outer", w + ".sole");
+      fd.sole.y_inner = r.positive(s, "y_inner", w + ".sole");
+      d.feet.push_back(fd);
+    }
+  }
+
+  if (const YAML::Node caps = root["capsules"]) {
+    if (!caps.IsSequence()) r.fail("capsules", "expected a list");
+    for (std::size_t i = 0; i < caps.size(); ++i) {
+      const std::string w = "capsules[" + std::to_string(i) + "]";
+      CapsuleDescription c;
+      c.link = r.as<std::string>(r.need(caps[i], "link", w), w + ".link");
+      c.p0 = r.vec3(caps[i], "p0", w);
+      c.p1 = r.vec3(caps[i], "p1", w);
+      c.radius = r.positive(caps[i], "radius", w);
+      d.capsules.push_back(c);
+    }
+  }
+
+  d.half_sitting = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(d.actuated.size()));
+  if (const YAML::Node hs = root["half_sitting_deg"]) {
+    if (!hs.IsSequence() || hs.size() != d.actuated.size())
+      r.fail("half_sitting_deg", "expected " + std::to_string(d.actuated.size()) +
+                                     " angles (one per actuated joint), got " +
+                                     std::to_string(hs.IsSequence() ? hs.size() : 0));
+    for (std::size_t i = 0; i < hs.size(); ++i) {
+      const double v = r.as<double>(hs[i], "half_sitting_deg") * kDeg;
+      const auto& a = d.actuated[i];
+      if (!(v >= a.lower && v <= a.upper))
+        r.fail("half_sitting_deg[" + std::to_string(i) + "]",
+               "angle of " + a.name + " outside its limits, got " + Reader::fmt(v / kDeg) + " deg");
+      d.half_sitting(static_cast<Eigen::Index>(i)) = v;
+    }
+  }
+
+  d.content_hash = fnv1a64(readFile(d.urdf_path), fnv1a64(text));
+  return d;
+}
+
+}  // namespace overstep::core

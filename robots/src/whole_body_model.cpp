@@ -1,0 +1,454 @@
+#include "overstep/robots/whole_body_model.hpp"
+
+#include <urdf_parser/urdf_parser.h>
+#include <dart/dynamics/BodyNode.hpp>
+#include <dart/dynamics/DegreeOfFreedom.hpp>
+#include <dart/dynamics/FreeJoint.hpp>
+#include <dart/dynamics/Joint.hpp>
+#include <dart/dynamics/Skeleton.hpp>
+#include <dart/utils/urdf/DartLoader.hpp>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <cmath>
+#include <set>
+#include <unordered_map>
+
+#include "overstep/core/error.hpp"
+
+namespace overstep::robots {
+namespace {
+
+using dart::dynamics::BodyNode;
+using dart::dynamics::Frame;
+using dart::dynamics::SkeletonPtr;
+
+/// Checks the URDF against the description with urdfdom before DART sees it (Debian's DART aborts
+/// on assertions, so invalid masses must never reach it).
+void validateUrdf(const core::RobotDescription& d, const std::string& urdf_text) {
+  const std::string& path = d.urdf_path;
+  urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(urdf_text);
+  if (!model) throw InputError(path + ": malformed URDF (urdfdom could not parse it)");
+  if (!model->getRoot() || model->getRoot()->name != d.base_link) {
+    throw InputError(path + ": root link is '" + (model->getRoot() ? model->getRoot()->name : "") +
+                     "', expected base_link '" + d.base_link + "' from " + d.yaml_path);
+  }
+  std::set<std::string> named;
+  auto checkJoint = [&](const std::string& name, const char* what) {
+    auto it = model->joints_.find(name);
+    if (it == model->joints_.end()) {
+      throw InputError(path + ": has no joint '" + name + "' (named as " + what + " in " +
+                       d.yaml_path + ")");
+    }
+    if (it->second->type != urdf::Joint::REVOLUTE && it->second->type != urdf::Joint::CONTINUOUS) {
+      throw InputError(path + ": joint '" + name + "' must be revolute, as " + what);
+    }
+    named.insert(name);
+  };
+  for (const auto& a : d.actuated) checkJoint(a.name, "an actuated joint");
+  for (const auto& e : d.elastic) checkJoint(e.name, "an elastic joint");
+  for (const auto& [name, joint] : model->joints_) {
+    if (joint->type != urdf::Joint::FIXED && !named.count(name)) {
+      throw InputError(path + ": movable joint '" + name + "' is neither actuated nor elastic in " +
+                       d.yaml_path);
+    }
+  }
+  for (const auto& [name, link] : model->links_) {
+    const auto& in = link->inertial;
+    if (!in) throw InputError(path + ": link '" + name + "' has no <inertial>");
+    if (!(in->mass > 0.0) || !std::isfinite(in->mass)) {
+      throw InputError(path + ": link '" + name + "' mass: expected > 0, got " +
+                       std::to_string(in->mass));
+    }
+    Eigen::Matrix3d I;
+    I << in->ixx, in->ixy, in->ixz, in->ixy, in->iyy, in->iyz, in->ixz, in->iyz, in->izz;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(I);
+    if (!I.allFinite() || es.eigenvalues().minCoeff() <= 0.0) {
+      throw InputError(path + ": link '" + name + "' inertia: expected positive definite");
+    }
+  }
+  for (const auto& f : d.frames) {
+    if (!model->getLink(f.link)) {
+      throw InputError(d.yaml_path + ": frame '" + f.name + "' names link '" + f.link +
+                       "', which " + path + " does not have");
+    }
+  }
+  for (const auto& c : d.capsules) {
+    if (!model->getLink(c.link)) {
+      throw InputError(d.yaml_path + ": capsule names link '" + c.link + "', which " + path +
+                       " does not have");
+    }
+  }
+  for (const auto& f : d.feet) {
+    if (!model->getLink(f.link)) {
+      throw InputError(d.yaml_path + ": foot '" + f.side + "' names link '" + f.link + "', which " +
+                       path + " does not have");
+    }
+  }
+}
+
+}  // namespace
+
+struct WholeBodyModel::Impl {
+  core::RobotDescription desc;
+  SkeletonPtr skel;
+  int n = 0;
+  int nb = 0;
+  std::vector<int> perm;      // model index -> DART index
+  Eigen::VectorXd reflected;  // per model coordinate: rotor term (0 for base/elastic)
+  Eigen::VectorXd stiffness;  // per model coordinate
+  Eigen::VectorXd damping;    // per model coordinate
+  struct FrameRef {
+    std::string name;
+    BodyNode* body;
+    Eigen::Isometry3d X_BF;
+  };
+  std::vector<FrameRef> frames;
+  std::unordered_map<std::string, int> frame_index;
+  double mass = 0.0;
+
+  void bindFrames() {
+    frames.clear();
+    frame_index.clear();
+    for (std::size_t i = 0; i < skel->getNumBodyNodes(); ++i) {
+      BodyNode* b = skel->getBodyNode(i);
+      frame_index[b->getName()] = static_cast<int>(frames.size());
+      frames.push_back({b->getName(), b, Eigen::Isometry3d::Identity()});
+    }
+    for (const auto& f : desc.frames) {
+      frame_index[f.name] = static_cast<int>(frames.size());
+      frames.push_back({f.name, skel->getBodyNode(f.link), f.X_LF});
+    }
+  }
+
+  Eigen::VectorXd toDart(const Eigen::VectorXd& x) const {
+    Eigen::VectorXd out(n);
+    for (int i = 0; i < n; ++i) out(perm[i]) = x(i);
+    return out;
+  }
+  Eigen::VectorXd fromDart(const Eigen::VectorXd& x) const {
+    Eigen::VectorXd out(n);
+    for (int i = 0; i < n; ++i) out(i) = x(perm[i]);
+    return out;
+  }
+  Eigen::MatrixXd colsFromDart(const Eigen::MatrixXd& J) const {
+    Eigen::MatrixXd out(J.rows(), n);
+    for (int i = 0; i < n; ++i) out.col(i) = J.col(perm[i]);
+    return out;
+  }
+  void checkSize(const Eigen::VectorXd& x, const char* what) const {
+    if (x.size() != n) {
+      throw InputError(std::string(what) + ": expected " + std::to_string(n) + " entries, got " +
+                       std::to_string(x.size()));
+    }
+  }
+  const FrameRef& frame(int i) const {
+    if (i < 0 || i >= static_cast<int>(frames.size())) {
+      throw InputError("frame index " + std::to_string(i) + " out of range");
+    }
+    return frames[static_cast<std::size_t>(i)];
+  }
+};
+
+WholeBodyModel::WholeBodyModel(core::RobotDescription description)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.desc = std::move(description);
+  const std::string urdf_text = core::readFile(m.desc.urdf_path);
+  validateUrdf(m.desc, urdf_text);
+
+  dart::utils::DartLoader::Options opts;
+  opts.mDefaultRootJointType = m.desc.floating_base
+                                   ? dart::utils::DartLoader::RootJointType::FLOATING
+                                   : dart::utils::DartLoader::RootJointType::FIXED;
+  dart::utils::DartLoader loader(opts);
+  m.skel =
+      loader.parseSkeletonString(urdf_text, dart::common::Uri::createFromPath(m.desc.urdf_path));
+  if (!m.skel) throw InputError(m.desc.urdf_path + ": DART could not build a skeleton from it");
+  m.skel->setGravity(Eigen::Vector3d(0.0, 0.0, -m.desc.gravity));
+
+  m.nb = m.desc.floating_base ? 6 : 0;
+  const int na = static_cast<int>(m.desc.actuated.size());
+  const int ne = static_cast<int>(m.desc.elastic.size());
+  m.n = m.nb + na + ne;
+  if (static_cast<int>(m.skel->getNumDofs()) != m.n) {
+    throw InputError(m.desc.urdf_path + ": skeleton has " + std::to_string(m.skel->getNumDofs()) +
+                     " coordinates, expected " + std::to_string(m.n) + " from " + m.desc.yaml_path);
+  }
+  m.perm.assign(static_cast<std::size_t>(m.n), -1);
+  for (int i = 0; i < m.nb; ++i) m.perm[static_cast<std::size_t>(i)] = i;
+  m.reflected = Eigen::VectorXd::Zero(m.n);
+  m.stiffness = Eigen::VectorXd::Zero(m.n);
+  m.damping = Eigen::VectorXd::Zero(m.n);
+  for (int i = 0; i < na; ++i) {
+    const auto& a = m.desc.actuated[static_cast<std::size_t>(i)];
+    dart::dynamics::Joint* j = m.skel->getJoint(a.name);
+    m.perm[static_cast<std::size_t>(m.nb + i)] = static_cast<int>(j->getIndexInSkeleton(0));
+    m.reflected(m.nb + i) = a.reflectedInertia();
+    j->setLimitEnforcement(false);
+  }
+  for (int i = 0; i < ne; ++i) {
+    const auto& e = m.desc.elastic[static_cast<std::size_t>(i)];
+    dart::dynamics::Joint* j = m.skel->getJoint(e.name);
+    const int c = m.nb + na + i;
+    m.perm[static_cast<std::size_t>(c)] = static_cast<int>(j->getIndexInSkeleton(0));
+    j->setSpringStiffness(0, e.stiffness);
+    j->setRestPosition(0, 0.0);
+    j->setDampingCoefficient(0, e.damping);
+    j->setLimitEnforcement(false);
+    m.stiffness(c) = e.stiffness;
+    m.damping(c) = e.damping;
+  }
+  m.mass = m.skel->getMass();
+  m.bindFrames();
+}
+
+WholeBodyModel WholeBodyModel::fromFile(const std::string& yaml_path) {
+  return WholeBodyModel(core::loadRobotDescription(yaml_path));
+}
+
+WholeBodyModel::WholeBodyModel(const WholeBodyModel& other)
+    : impl_(std::make_unique<Impl>(*other.impl_)) {
+  impl_->skel = other.impl_->skel->cloneSkeleton();
+  impl_->bindFrames();
+}
+
+WholeBodyModel& WholeBodyModel::operator=(const WholeBodyModel& other) {
+  if (this != &other) *this = WholeBodyModel(other);
+  return *this;
+}
+
+WholeBodyModel::WholeBodyModel(WholeBodyModel&&) noexcept = default;
+WholeBodyModel& WholeBodyModel::operator=(WholeBodyModel&&) noexcept = default;
+WholeBodyModel::~WholeBodyModel() = default;
+
+const core::RobotDescription& WholeBodyModel::description() const { return impl_->desc; }
+int WholeBodyModel::dofs() const { return impl_->n; }
+int WholeBodyModel::baseDofs() const { return impl_->nb; }
+int WholeBodyModel::actuatedCount() const { return static_cast<int>(impl_->desc.actuated.size()); }
+int WholeBodyModel::elasticCount() const { return static_cast<int>(impl_->desc.elastic.size()); }
+double WholeBodyModel::totalMass() const { return impl_->mass; }
+int WholeBodyModel::dartIndex(int i) const { return impl_->perm.at(static_cast<std::size_t>(i)); }
+std::shared_ptr<dart::dynamics::Skeleton> WholeBodyModel::skeleton() const { return impl_->skel; }
+
+std::vector<std::string> WholeBodyModel::coordinateNames() const {
+  std::vector<std::string> names;
+  if (impl_->nb == 6) names = {"base_rx", "base_ry", "base_rz", "base_x", "base_y", "base_z"};
+  for (const auto& a : impl_->desc.actuated) names.push_back(a.name);
+  for (const auto& e : impl_->desc.elastic) names.push_back(e.name);
+  return names;
+}
+
+void WholeBodyModel::setPositions(const Eigen::VectorXd& q) {
+  impl_->checkSize(q, "positions");
+  impl_->skel->setPositions(impl_->toDart(q));
+}
+void WholeBodyModel::setVelocities(const Eigen::VectorXd& v) {
+  impl_->checkSize(v, "velocities");
+  impl_->skel->setVelocities(impl_->toDart(v));
+}
+void WholeBodyModel::setAccelerations(const Eigen::VectorXd& a) {
+  impl_->checkSize(a, "accelerations");
+  impl_->skel->setAccelerations(impl_->toDart(a));
+}
+void WholeBodyModel::setState(const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                              const Eigen::VectorXd& a) {
+  setPositions(q);
+  setVelocities(v);
+  setAccelerations(a);
+}
+Eigen::VectorXd WholeBodyModel::positions() const {
+  return impl_->fromDart(impl_->skel->getPositions());
+}
+Eigen::VectorXd WholeBodyModel::velocities() const {
+  return impl_->fromDart(impl_->skel->getVelocities());
+}
+Eigen::VectorXd WholeBodyModel::accelerations() const {
+  return impl_->fromDart(impl_->skel->getAccelerations());
+}
+
+Eigen::VectorXd WholeBodyModel::integrate(const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                                          double dt) const {
+  impl_->checkSize(q, "positions");
+  impl_->checkSize(v, "velocities");
+  Eigen::VectorXd out = q + v * dt;
+  if (impl_->nb == 6) {
+    Eigen::Isometry3d X = dart::dynamics::FreeJoint::convertToTransform(q.head<6>());
+    const Eigen::Vector6d V = v.head<6>() * dt;  // body-frame twist
+    X = X * dart::math::expMap(V);
+    out.head<6>() = dart::dynamics::FreeJoint::convertToPositions(X);
+  }
+  return out;
+}
+
+Eigen::VectorXd WholeBodyModel::difference(const Eigen::VectorXd& q1,
+                                           const Eigen::VectorXd& q0) const {
+  impl_->checkSize(q1, "positions");
+  impl_->checkSize(q0, "positions");
+  Eigen::VectorXd out = q1 - q0;
+  if (impl_->nb == 6) {
+    const Eigen::Isometry3d X0 = dart::dynamics::FreeJoint::convertToTransform(q0.head<6>());
+    const Eigen::Isometry3d X1 = dart::dynamics::FreeJoint::convertToTransform(q1.head<6>());
+    out.head<6>() = dart::math::logMap(X0.inverse() * X1);
+  }
+  return out;
+}
+
+Eigen::VectorXd WholeBodyModel::halfSitting() {
+  const Eigen::VectorXd saved = impl_->skel->getPositions();
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(impl_->n);
+  q.segment(impl_->nb, actuatedCount()) = impl_->desc.half_sitting;
+  const auto* r = impl_->desc.foot("right");
+  const auto* l = impl_->desc.foot("left");
+  if (impl_->nb == 6 && r && l) {
+    setPositions(q);
+    const Eigen::Vector3d mid = 0.5 * (framePose(frameIndex(r->sole_frame)).translation() +
+                                       framePose(frameIndex(l->sole_frame)).translation());
+    q.segment<3>(3) = -mid;
+  }
+  impl_->skel->setPositions(saved);
+  return q;
+}
+
+bool WholeBodyModel::hasFrame(const std::string& name) const {
+  return impl_->frame_index.count(name) != 0;
+}
+
+int WholeBodyModel::frameIndex(const std::string& name) const {
+  auto it = impl_->frame_index.find(name);
+  if (it == impl_->frame_index.end()) {
+    throw InputError("unknown frame or link '" + name + "' in robot '" + impl_->desc.name + "'");
+  }
+  return it->second;
+}
+
+Eigen::Isometry3d WholeBodyModel::framePose(int frame) const {
+  const auto& f = impl_->frame(frame);
+  return f.body->getWorldTransform() * f.X_BF;
+}
+
+Eigen::MatrixXd WholeBodyModel::frameJacobian(int frame) const {
+  const auto& f = impl_->frame(frame);
+  return impl_->colsFromDart(impl_->skel->getWorldJacobian(f.body, f.X_BF.translation()));
+}
+
+Vector6d WholeBodyModel::frameVelocity(int frame) const {
+  const auto& f = impl_->frame(frame);
+  Vector6d v;
+  v.head<3>() = f.body->getAngularVelocity(Frame::World(), Frame::World());
+  v.tail<3>() = f.body->getLinearVelocity(f.X_BF.translation(), Frame::World(), Frame::World());
+  return v;
+}
+
+Vector6d WholeBodyModel::frameAcceleration(int frame) const {
+  const auto& f = impl_->frame(frame);
+  Vector6d a;
+  a.head<3>() = f.body->getAngularAcceleration(Frame::World(), Frame::World());
+  a.tail<3>() = f.body->getLinearAcceleration(f.X_BF.translation(), Frame::World(), Frame::World());
+  return a;
+}
+
+Eigen::Vector3d WholeBodyModel::com() const { return impl_->skel->getCOM(); }
+Eigen::Vector3d WholeBodyModel::comVelocity() const { return impl_->skel->getCOMLinearVelocity(); }
+Eigen::Vector3d WholeBodyModel::comAcceleration() const {
+  return impl_->skel->getCOMLinearAcceleration();
+}
+Eigen::MatrixXd WholeBodyModel::comJacobian() const {
+  return impl_->colsFromDart(impl_->skel->getCOMLinearJacobian());
+}
+
+Vector6d WholeBodyModel::centroidalMomentum() const {
+  const Eigen::Vector3d c = com();
+  Vector6d h = Vector6d::Zero();
+  for (std::size_t i = 0; i < impl_->skel->getNumBodyNodes(); ++i) {
+    BodyNode* b = impl_->skel->getBodyNode(i);
+    const Eigen::Vector6d hb = b->getSpatialInertia() * b->getSpatialVelocity();  // body frame
+    const Eigen::Isometry3d& X = b->getWorldTransform();
+    const Eigen::Vector3d lin = X.linear() * hb.tail<3>();
+    h.head<3>() += lin;
+    h.tail<3>() += X.linear() * hb.head<3>() + (X.translation() - c).cross(lin);
+  }
+  return h;
+}
+
+Eigen::MatrixXd WholeBodyModel::massMatrix(bool with_rotor) const {
+  const Eigen::MatrixXd& Md = impl_->skel->getMassMatrix();
+  const int n = impl_->n;
+  Eigen::MatrixXd M(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) M(i, j) = Md(impl_->perm[i], impl_->perm[j]);
+  if (with_rotor) M.diagonal() += impl_->reflected;
+  return M;
+}
+
+Eigen::VectorXd WholeBodyModel::nonlinearEffects() const {
+  Eigen::VectorXd h = impl_->fromDart(impl_->skel->getCoriolisAndGravityForces());
+  const Eigen::VectorXd q = positions();
+  const Eigen::VectorXd v = velocities();
+  h += impl_->stiffness.cwiseProduct(q) + impl_->damping.cwiseProduct(v);
+  return h;
+}
+
+Eigen::VectorXd WholeBodyModel::inverseDynamics() const {
+  // Springs and dampers are added here, not by DART: DART's inverse dynamics evaluates the spring
+  // at q + dt qdot (its implicit-integration form), which is not the model's k q.
+  impl_->skel->computeInverseDynamics(false, false, false);
+  Eigen::VectorXd tau = impl_->fromDart(impl_->skel->getForces());
+  tau += impl_->reflected.cwiseProduct(accelerations()) +
+         impl_->stiffness.cwiseProduct(positions()) + impl_->damping.cwiseProduct(velocities());
+  return tau;
+}
+
+Vector6d WholeBodyModel::contactWrenchFromBase(const Eigen::VectorXd& tau) const {
+  if (impl_->nb != 6) throw InputError("contactWrenchFromBase needs a floating-base robot");
+  BodyNode* base = impl_->skel->getRootBodyNode();
+  const Eigen::Vector3d origin_in_base =
+      base->getWorldTransform().inverse() * Eigen::Vector3d::Zero();
+  const Eigen::MatrixXd J = impl_->skel->getWorldJacobian(base, origin_in_base);
+  const Eigen::Matrix<double, 6, 6> Jb = J.leftCols<6>();
+  return Jb.transpose().partialPivLu().solve(tau.head<6>());
+}
+
+Eigen::Vector2d WholeBodyModel::zmpFromMotion(double ground_z) const {
+  return core::zmpFromWrench(contactWrenchFromBase(inverseDynamics()), ground_z);
+}
+
+Eigen::Vector2d WholeBodyModel::tableCartZmp(double ground_z) const {
+  return core::tableCartZmp(com(), comAcceleration(), impl_->desc.gravity, ground_z);
+}
+
+Eigen::MatrixXd WholeBodyModel::contactJacobian(
+    const std::vector<ContactConstraint>& contacts) const {
+  int rows = 0;
+  for (const auto& c : contacts) rows += c.type == ContactConstraint::Type::Flat ? 6 : 3;
+  Eigen::MatrixXd J(rows, impl_->n);
+  int r = 0;
+  for (const auto& c : contacts) {
+    const Eigen::MatrixXd Jf = frameJacobian(c.frame);
+    if (c.type == ContactConstraint::Type::Flat) {
+      J.middleRows(r, 6) = Jf;
+      r += 6;
+    } else {
+      J.middleRows(r, 3) = Jf.bottomRows(3);
+      r += 3;
+    }
+  }
+  return J;
+}
+
+Eigen::VectorXd WholeBodyModel::impactMap(const Eigen::VectorXd& v_minus,
+                                          const std::vector<ContactConstraint>& contacts,
+                                          Eigen::VectorXd* impulse) const {
+  impl_->checkSize(v_minus, "velocities");
+  const Eigen::MatrixXd M = massMatrix(true);
+  const Eigen::MatrixXd J = contactJacobian(contacts);
+  const Eigen::LDLT<Eigen::MatrixXd> Mf(M);
+  const Eigen::MatrixXd MinvJt = Mf.solve(J.transpose());
+  const Eigen::MatrixXd A = J * MinvJt;
+  // A is singular for redundant contact sets: the minimum-norm impulse is the physical one.
+  const Eigen::VectorXd L = A.completeOrthogonalDecomposition().solve(-J * v_minus);
+  if (impulse) *impulse = L;
+  return v_minus + MinvJt * L;
+}
+
+}  // namespace overstep::robots

@@ -1,0 +1,87 @@
+// Hot paths of the whole-body model (Release build): what one planner sample evaluation costs.
+// Run: ./build/tests/bench/bench_model
+#include <benchmark/benchmark.h>
+
+#include <random>
+
+#include "overstep/robots/whole_body_model.hpp"
+
+namespace {
+
+using overstep::robots::WholeBodyModel;
+
+WholeBodyModel& model() {
+  static WholeBodyModel m =
+      WholeBodyModel::fromFile(std::string(OVERSTEP_DATA_DIR) + "/robots/hrp2/hrp2.yaml");
+  return m;
+}
+
+void setRandomState(WholeBodyModel& m) {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  Eigen::VectorXd q = m.halfSitting(), v(m.dofs()), a(m.dofs());
+  for (int i = 0; i < m.dofs(); ++i) {
+    q(i) += u(rng);
+    v(i) = u(rng);
+    a(i) = u(rng);
+  }
+  m.setState(q, v, a);
+}
+
+void BM_SetStateAndInverseDynamics(benchmark::State& st) {
+  WholeBodyModel& m = model();
+  setRandomState(m);
+  const Eigen::VectorXd q = m.positions(), v = m.velocities(), a = m.accelerations();
+  for (auto _ : st) {
+    m.setState(q, v, a);
+    benchmark::DoNotOptimize(m.inverseDynamics());
+  }
+}
+BENCHMARK(BM_SetStateAndInverseDynamics);
+
+void BM_MassMatrix(benchmark::State& st) {
+  WholeBodyModel& m = model();
+  setRandomState(m);
+  const Eigen::VectorXd q = m.positions();
+  for (auto _ : st) {
+    m.setPositions(q);
+    benchmark::DoNotOptimize(m.massMatrix());
+  }
+}
+BENCHMARK(BM_MassMatrix);
+
+void BM_ComAndJacobian(benchmark::State& st) {
+  WholeBodyModel& m = model();
+  setRandomState(m);
+  const Eigen::VectorXd q = m.positions();
+  for (auto _ : st) {
+    m.setPositions(q);
+    benchmark::DoNotOptimize(m.com());
+    benchmark::DoNotOptimize(m.comJacobian());
+  }
+}
+BENCHMARK(BM_ComAndJacobian);
+
+void BM_TwoFootJacobians(benchmark::State& st) {
+  WholeBodyModel& m = model();
+  setRandomState(m);
+  const Eigen::VectorXd q = m.positions();
+  const int r = m.frameIndex("right_sole"), l = m.frameIndex("left_sole");
+  for (auto _ : st) {
+    m.setPositions(q);
+    benchmark::DoNotOptimize(m.frameJacobian(r));
+    benchmark::DoNotOptimize(m.frameJacobian(l));
+  }
+}
+BENCHMARK(BM_TwoFootJacobians);
+
+void BM_CentroidalMomentum(benchmark::State& st) {
+  WholeBodyModel& m = model();
+  setRandomState(m);
+  for (auto _ : st) benchmark::DoNotOptimize(m.centroidalMomentum());
+}
+BENCHMARK(BM_CentroidalMomentum);
+
+}  // namespace
+
+BENCHMARK_MAIN();

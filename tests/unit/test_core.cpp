@@ -1,0 +1,152 @@
+// core: robot description loading/validation and the wrench/ZMP helpers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "overstep/core/error.hpp"
+#include "overstep/core/robot_description.hpp"
+#include "overstep/core/wrench.hpp"
+#include "test_util.hpp"
+
+namespace overstep {
+namespace {
+
+using test::TempDir;
+
+TEST(RobotDescription, LoadsHrp2Tables) {
+  const core::RobotDescription d = core::loadRobotDescription(test::hrp2Yaml());
+  ASSERT_EQ(d.actuated.size(), 30u);
+  ASSERT_EQ(d.elastic.size(), 4u);
+  EXPECT_EQ(d.actuated.front().name, "RLEG_JOINT0");
+  EXPECT_EQ(d.actuated[12].name, "CHEST_JOINT0");
+  EXPECT_EQ(d.actuated.back().name, "LARM_JOINT6");
+  ASSERT_EQ(d.feet.size(), 2u);
+  EXPECT_EQ(d.feet[0].side, "right");
+  // Sole rectangle 0.230 x 0.131 m.
+  EXPECT_NEAR(d.feet[0].sole.x_front + d.feet[0].sole.x_back, 0.230, 1e-12);
+  EXPECT_NEAR(d.feet[0].yMax() - d.feet[0].yMin(), 0.131, 1e-12);
+  EXPECT_LT(d.feet[0].centre().y(), 0.0);  // right foot: outer side is -y
+  EXPECT_GT(d.feet[1].centre().y(), 0.0);
+  for (const auto& a : d.actuated) {
+    EXPECT_LT(a.lower, a.safeLower()) << a.name;
+    EXPECT_GT(a.upper, a.safeUpper()) << a.name;
+  }
+  for (Eigen::Index i = 0; i < d.half_sitting.size(); ++i) {
+    const auto& a = d.actuated[static_cast<std::size_t>(i)];
+    EXPECT_GE(d.half_sitting(i), a.safeLower()) << a.name;
+    EXPECT_LE(d.half_sitting(i), a.safeUpper()) << a.name;
+  }
+  EXPECT_NE(d.content_hash, 0u);
+  EXPECT_EQ(d.hashHex().size(), 16u);
+}
+
+// Writes a copy of the HRP-2 YAML (and URDF) with one edit and expects an InputError whose single
+// line contains `expect`.
+void expectYamlError(const std::string& from, const std::string& to, const std::string& expect) {
+  TempDir dir;
+  test::writeText(dir.path() / "hrp2.urdf", test::slurp(test::hrp2Urdf()));
+  test::writeText(dir.path() / "hrp2.yaml",
+                  test::replaceOnce(test::slurp(test::hrp2Yaml()), from, to));
+  try {
+    core::loadRobotDescription(dir.file("hrp2.yaml"));
+    FAIL() << "expected InputError containing '" << expect << "'";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(expect), std::string::npos) << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << "message must be one line: " << msg;
+  }
+}
+
+TEST(RobotDescription, RejectsNegativeStiffness) {
+  expectYamlError("stiffness: 707", "stiffness: -707",
+                  "elastic_joints[0].stiffness: expected >= 0");
+}
+
+TEST(RobotDescription, RejectsNegativeDamping) {
+  expectYamlError("damping: 30", "damping: -1", "damping: expected >= 0");
+}
+
+TEST(RobotDescription, RejectsMalformedYaml) {
+  expectYamlError("name: hrp2_class", "name: [hrp2_class", "malformed YAML");
+}
+
+TEST(RobotDescription, RejectsNonNumeric) {
+  expectYamlError("velocity: 3.54", "velocity: fast", "expected a number, got 'fast'");
+}
+
+TEST(RobotDescription, RejectsInvertedLimits) {
+  expectYamlError("limits_deg: [-45, 30]", "limits_deg: [30, -45]", "expected lower < upper");
+}
+
+TEST(RobotDescription, RejectsMissingKey) {
+  expectYamlError("base_link: BODY", "base_lnk: BODY", "base_link: missing key");
+}
+
+TEST(RobotDescription, RejectsHalfSittingOutsideLimits) {
+  expectYamlError("half_sitting_deg: [0, 0, -26, 50", "half_sitting_deg: [0, 0, -26, 170",
+                  "outside its limits");
+}
+
+TEST(RobotDescription, RejectsMissingFile) {
+  try {
+    core::loadRobotDescription("/nonexistent/robot.yaml");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/robot.yaml: no such file"),
+              std::string::npos);
+  }
+}
+
+TEST(Wrench, ZmpOfPureForceIsItsLineOfAction) {
+  // A vertical force of 500 N through (0.1, -0.2, 0) seen about the world origin.
+  const Eigen::Vector3d p(0.1, -0.2, 0.0);
+  core::Vector6d w_p;
+  w_p << 0, 0, 0, 0, 0, 500;
+  const core::Vector6d w_O = core::shiftWrench(w_p, p, Eigen::Vector3d::Zero());
+  const Eigen::Vector2d z = core::zmpFromWrench(w_O);
+  EXPECT_NEAR(z.x(), 0.1, 1e-12);
+  EXPECT_NEAR(z.y(), -0.2, 1e-12);
+}
+
+TEST(Wrench, ZmpOnRaisedGroundAccountsForShear) {
+  // Force with shear through (0.05, 0.02, 0.1): the ZMP on z = 0.1 is that point.
+  const Eigen::Vector3d p(0.05, 0.02, 0.1);
+  core::Vector6d w_p;
+  w_p << 0, 0, 0, 30, -20, 400;
+  const core::Vector6d w_O = core::shiftWrench(w_p, p, Eigen::Vector3d::Zero());
+  const Eigen::Vector2d z = core::zmpFromWrench(w_O, 0.1);
+  EXPECT_NEAR(z.x(), 0.05, 1e-12);
+  EXPECT_NEAR(z.y(), 0.02, 1e-12);
+}
+
+TEST(Wrench, NoNormalForceGivesNaN) {
+  core::Vector6d w = core::Vector6d::Zero();
+  EXPECT_TRUE(core::zmpFromWrench(w).hasNaN());
+  EXPECT_TRUE(core::localCop(w).hasNaN());
+}
+
+TEST(Wrench, TransformMatchesShiftAndRotation) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  X.translation() << 0.2, -0.1, 0.4;
+  core::Vector6d w_F;
+  w_F << 1, -2, 3, 10, 20, 300;
+  const core::Vector6d w_W = core::transformWrench(X, w_F);
+  // Rotated force, torque about W's origin = R tau + p x (R f).
+  EXPECT_TRUE(w_W.tail<3>().isApprox(X.linear() * w_F.tail<3>()));
+  const Eigen::Vector3d expect =
+      X.linear() * w_F.head<3>() + X.translation().cross(X.linear() * w_F.tail<3>());
+  EXPECT_TRUE(w_W.head<3>().isApprox(expect));
+}
+
+TEST(Wrench, TableCartZmpOfStaticComIsItsProjection) {
+  const Eigen::Vector2d z = core::tableCartZmp({0.03, -0.01, 0.8}, Eigen::Vector3d::Zero(), 9.81);
+  EXPECT_DOUBLE_EQ(z.x(), 0.03);
+  EXPECT_DOUBLE_EQ(z.y(), -0.01);
+  // Accelerating forward moves the ZMP backward by z/g * a.
+  const Eigen::Vector2d z2 = core::tableCartZmp({0.0, 0.0, 0.8}, {1.0, 0.0, 0.0}, 9.81);
+  EXPECT_NEAR(z2.x(), -0.8 / 9.81, 1e-12);
+}
+
+}  // namespace
+}  // namespace overstep
