@@ -310,6 +310,28 @@ Eigen::VectorXd WholeBodyModel::halfSitting() {
   return q;
 }
 
+void WholeBodyModel::anchorBase(int frame, const Eigen::Isometry3d& X_WF, Eigen::VectorXd& q,
+                                Eigen::VectorXd& v, Eigen::VectorXd& a) {
+  if (impl_->nb != 6) throw InputError("anchorBase needs a floating-base robot");
+  impl_->checkSize(q, "positions");
+  impl_->checkSize(v, "velocities");
+  impl_->checkSize(a, "accelerations");
+  q.head<6>().setZero();
+  setPositions(q);
+  const Eigen::Isometry3d X_BF = framePose(frame);  // base at the identity
+  q.head<6>() = dart::dynamics::FreeJoint::convertToPositions(X_WF * X_BF.inverse());
+  setPositions(q);
+  const Eigen::MatrixXd J = frameJacobian(frame);
+  const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> Jb(J.leftCols<6>());
+  v.head<6>().setZero();
+  v.head<6>() = -Jb.solve(J * v);
+  a.head<6>().setZero();
+  setVelocities(v);
+  setAccelerations(a);
+  a.head<6>() = -Jb.solve(frameAcceleration(frame));
+  setAccelerations(a);
+}
+
 bool WholeBodyModel::hasFrame(const std::string& name) const {
   return impl_->frame_index.count(name) != 0;
 }

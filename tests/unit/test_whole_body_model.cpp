@@ -396,3 +396,35 @@ TEST(BadRobotFiles, MalformedUrdf) { expectModelError("</robot>", "</robt>", "ma
 
 }  // namespace
 }  // namespace overstep::robots
+
+namespace overstep::robots {
+namespace {
+
+TEST(AnchorBase, StanceFootIsPlacedAndStationary) {
+  WholeBodyModel m = WholeBodyModel::fromFile(test::hrp2Yaml());
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Eigen::VectorXd q = m.halfSitting(), v(m.dofs()), a(m.dofs());
+  for (int i = 0; i < m.dofs(); ++i) {
+    q(i) += 0.2 * u(rng);
+    v(i) = u(rng);
+    a(i) = 2.0 * u(rng);
+  }
+  const Eigen::VectorXd joints = q.tail(m.dofs() - 6);
+  Eigen::Isometry3d X_WF = Eigen::Isometry3d::Identity();
+  X_WF.translation() << 0.4, -0.1, 0.0;
+  X_WF.linear() = Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const int foot = m.frameIndex("right_sole");
+  m.anchorBase(foot, X_WF, q, v, a);
+  EXPECT_TRUE(m.framePose(foot).isApprox(X_WF, 1e-12));
+  EXPECT_LT(m.frameVelocity(foot).norm(), 1e-10);
+  EXPECT_LT(m.frameAcceleration(foot).norm(), 1e-9);
+  EXPECT_EQ(q.tail(m.dofs() - 6), joints);  // joint entries untouched
+  // Integrating the anchored motion keeps the foot in place to second order.
+  const double dt = 1e-4;
+  m.setPositions(m.integrate(q, v * dt + 0.5 * a * dt * dt, 1.0));
+  EXPECT_LT((m.framePose(foot).translation() - X_WF.translation()).norm(), 1e-9);
+}
+
+}  // namespace
+}  // namespace overstep::robots

@@ -85,6 +85,12 @@ class WholeBodyModel {
   /// two sole frames at the world origin. Uses this workspace and restores its positions.
   Eigen::VectorXd halfSitting();
 
+  /// Floating-base closure: overwrites the base entries of q, v and a (joint entries are kept) so
+  /// that `frame` sits at X_WF and is stationary (zero velocity and classical acceleration), then
+  /// sets that state. This is how a plan places the base on its stance foot.
+  void anchorBase(int frame, const Eigen::Isometry3d& X_WF, Eigen::VectorXd& q, Eigen::VectorXd& v,
+                  Eigen::VectorXd& a);
+
   // ------------------------------------------------------------------ frames
   /// Index of a frame named in the YAML or of a link (link frames are registered under the link
   /// name). Throws InputError for an unknown name.

@@ -1,0 +1,43 @@
+#pragma once
+/// \file
+/// Collision geometry for the planner: link capsules (rounded cylinders, seed III-C-2) and the
+/// obstacle, with signed distances from FCL (negative = penetration depth), and a smooth minimum
+/// (Kreisselmeier-Steinhauser) to aggregate many distances into one differentiable row.
+
+#include <Eigen/Geometry>
+
+#include "overstep/core/obstacle.hpp"
+
+namespace overstep::planner {
+
+/// A capsule in the world frame: segment p0-p1 swept by a sphere of `radius`.
+struct Capsule {
+  Eigen::Vector3d p0 = Eigen::Vector3d::Zero();
+  Eigen::Vector3d p1 = Eigen::Vector3d::Zero();
+  double radius = 0.0;
+};
+
+/// The obstacle's solid in the world frame. A box bar spans [x_near, x_far] x [-length/2,
+/// length/2] x [0, height]; a cylinder bar has its axis along y at x = centre, z = height - r.
+struct ObstacleGeometry {
+  core::ObstacleSpec::Shape shape = core::ObstacleSpec::Shape::Box;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();  ///< box extents (x, y, z)
+  double radius = 0.0;                             ///< cylinder radius
+  double length = 0.0;                             ///< cylinder length along y
+
+  /// The envelope (with margin) placed `spec.gap` ahead of the start toes at x = toes_x.
+  static ObstacleGeometry fromSpec(const core::ObstacleSpec& spec, double toes_x);
+};
+
+/// Signed distance between two capsules; nearest points (world) if requested.
+double capsuleDistance(const Capsule& a, const Capsule& b, Eigen::Vector3d* pa = nullptr,
+                       Eigen::Vector3d* pb = nullptr);
+/// Signed distance between a capsule and the obstacle.
+double obstacleDistance(const Capsule& a, const ObstacleGeometry& obstacle,
+                        Eigen::Vector3d* pa = nullptr, Eigen::Vector3d* pb = nullptr);
+/// Smooth minimum -1/rho log(sum exp(-rho d_i)) (<= min d_i, within log(n)/rho of it); writes
+/// d(smoothMin)/d(d_i) (softmax weights, summing to 1) if requested.
+double smoothMin(const Eigen::VectorXd& d, double rho, Eigen::VectorXd* weights = nullptr);
+
+}  // namespace overstep::planner
