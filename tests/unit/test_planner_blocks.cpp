@@ -166,6 +166,11 @@ TEST(Collision, ObstacleDistancesMatchClosedForms) {
   const Eigen::Vector3d p = gc.centre + 0.2 * Eigen::Vector3d(1, 0, 1).normalized();
   Capsule diag{p, p, 0.01};
   EXPECT_NEAR(obstacleDistance(diag, gc), 0.2 - 0.055 - 0.01, 1e-6);
+  // A shin through the bar: negative distance (penetration), no abort.
+  Capsule through{{0.2, 0.0, 0.05}, {0.3, 0.0, 0.05}, 0.02};
+  const double pen = obstacleDistance(through, g);
+  EXPECT_LT(pen, -0.02);
+  EXPECT_GT(pen, -0.2);
   // Margin grows the envelope.
   core::ObstacleSpec wide = box;
   wide.margin = 0.02;
