@@ -14,7 +14,7 @@ struct ObstacleSpec {
   double height = 0.20;  ///< m, top of the envelope above the ground
   double width = 0.11;   ///< m, extent along x (a cylinder's diameter)
   double length = 1.0;   ///< m, extent along y
-  double gap = 0.05;     ///< m, from the start toes (sole front edge) to the near face
+  double gap = 0.03;     ///< m, from the start toes (sole front edge) to the near face
   double margin = 0.0;   ///< m, extra clearance added to height and to each side in x
 
   /// Near face (x) in the world frame given the x of the start toes.

@@ -1,0 +1,69 @@
+#pragma once
+/// \file
+/// The plan: the planner -> runtime / checker contract, and its file format (JSON, versioned,
+/// documented in docs/plan-format.md). Samples are dense at `rate` Hz from t = 0 to the duration.
+/// Coordinates follow the robot's model order [base 6 | actuated | elastic]. Wrenches here are
+/// [torque; force] about the sole-frame origin, expressed in the world frame (the file stores
+/// them force first, [fx fy fz mx my mz], like the sensors).
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "overstep/core/obstacle.hpp"
+
+namespace overstep::core {
+
+struct PlanPhase {
+  std::string name;
+  double start = 0.0;     ///< s
+  double duration = 0.0;  ///< s
+  bool right_contact = true;
+  bool left_contact = true;
+};
+
+struct Plan {
+  static constexpr int kFormatVersion = 1;
+
+  std::string robot_name;
+  std::string robot_file;
+  std::string robot_hash;  ///< RobotDescription::hashHex() of the model that planned it
+  ObstacleSpec obstacle;
+  double toes_x = 0.0;             ///< x of the start toes (the obstacle's gap is measured from it)
+  std::string config_json = "{}";  ///< the planner configuration used (JSON object text)
+  std::string summary_json = "{}"; ///< the planner's summary (JSON object text)
+  std::vector<PlanPhase> phases;
+  double rate = 200.0;  ///< Hz of the samples
+  std::vector<std::string> coordinates;
+
+  Eigen::VectorXd t;       ///< N sample times, s
+  Eigen::VectorXi phase;   ///< N phase indices
+  Eigen::MatrixXd q;       ///< dofs x N positions
+  Eigen::MatrixXd v;       ///< dofs x N velocities
+  Eigen::MatrixXd a;       ///< dofs x N accelerations
+  Eigen::MatrixXd tau;     ///< actuated x N joint torques, N m
+  Eigen::MatrixXd com;     ///< 3 x N, m
+  Eigen::MatrixXd zmp_wholebody;  ///< 2 x N, m
+  Eigen::MatrixXd zmp_tablecart;  ///< 2 x N, m
+  Eigen::MatrixXd right_foot;     ///< 7 x N sole-frame pose [x y z qw qx qy qz]
+  Eigen::MatrixXd left_foot;      ///< 7 x N
+  Eigen::MatrixXd right_wrench;   ///< 6 x N [torque; force] about the sole origin, world frame
+  Eigen::MatrixXd left_wrench;    ///< 6 x N
+
+  int samples() const { return static_cast<int>(t.size()); }
+  double duration() const { return t.size() ? t(t.size() - 1) : 0.0; }
+  /// Resizes every sample array for n samples of `dofs` coordinates, `actuated` joints.
+  void resize(int n, int dofs, int actuated);
+};
+
+/// Writes the plan atomically (temporary file in the same directory, then rename).
+void savePlan(const Plan& plan, const std::string& path);
+/// Reads and validates a plan file (format, version, array sizes, finite values). InputError on
+/// any problem, one line naming the file and the field.
+Plan loadPlan(const std::string& path);
+
+/// Writes `text` to `path` atomically: a temporary file beside it, flushed, then renamed over.
+/// Nothing is left half-written; throws InputError naming the path when it cannot write.
+void writeFileAtomic(const std::string& path, const std::string& text);
+
+}  // namespace overstep::core

@@ -1,0 +1,64 @@
+#pragma once
+/// \file
+/// Planner configuration (planner/planner.yaml): discretisation, bounds, contact model,
+/// clearances, objective weights and solver settings. Units SI.
+
+#include <array>
+#include <map>
+#include <string>
+
+#include "overstep/planner/phases.hpp"
+
+namespace overstep::planner {
+
+struct SolverSettings {
+  std::string algorithm = "LD_SLSQP";
+  int max_iterations = 400;
+  double constraint_tolerance = 1e-6;
+  double ftol_rel = 1e-7;
+  double time_limit = 900.0;  ///< s
+  int threads = 2;
+};
+
+struct PlannerConfig {
+  std::array<int, kPhaseCount> samples_per_phase{8, 14, 5, 14, 8};
+  std::array<int, kPhaseCount> spline_intervals{3, 6, 2, 6, 3};
+  std::array<double, kPhaseCount> duration_min{0.4, 0.7, 0.15, 0.7, 0.4};
+  std::array<double, kPhaseCount> duration_max{2.0, 3.0, 1.0, 3.0, 2.0};
+  std::array<double, kPhaseCount> duration_guess{0.8, 1.3, 0.4, 1.3, 0.8};
+
+  double start_half_width = 0.095;
+  double step_length_min = 0.30, step_length_max = 0.65;
+  double foot_y_min = 0.06, foot_y_max = 0.13;
+  double guess_step_length = 0.41, guess_half_width = 0.085;
+  double guess_pelvis_drop = 0.19, guess_swing_clearance = 0.06;
+
+  double cop_box = 0.01;
+  std::vector<double> cop_homotopy{0.04, 0.02};
+  double friction = 0.7, torsion = 0.02, min_normal_force = 20.0;
+
+  double swing_clearance = 0.02, obstacle_clearance = 0.01, self_clearance = 0.005;
+  double pelvis_tilt = 0.005, leg_reach = 0.585, smooth_min_rho = 200.0;
+  double height_homotopy_step = 0.05;
+
+  std::map<std::string, double> weights{
+      {"elastic_acc", 0.01},   {"elastic_vel", 0.1},    {"elastic_pos", 1.0},
+      {"lin_mom_z", 0.1},      {"lin_mom_z_rate", 0.1}, {"ang_mom_z_rate", 0.1},
+      {"contact_torque_z", 0.1}, {"zmp_lipm", 1.0},     {"time", 0.5},
+      {"head", 0.1},           {"torque_rate", 0.01}};
+  double head_pitch_offset = 0.0;
+
+  SolverSettings solver;
+
+  /// The configuration as a JSON object (for plan files and --json output).
+  std::string toJson() const;
+};
+
+/// Loads planner.yaml; keys absent from the file keep their defaults. InputError on a malformed
+/// file, an unknown key or an invalid value (one line naming file and key).
+PlannerConfig loadPlannerConfig(const std::string& path);
+
+/// Names of the objective terms, in report order.
+const std::array<const char*, 11>& objectiveTermNames();
+
+}  // namespace overstep::planner

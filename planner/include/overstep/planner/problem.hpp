@@ -1,0 +1,126 @@
+#pragma once
+/// \file
+/// The overstep optimal control problem transcribed to a nonlinear program (see docs/planner.md).
+///
+/// Decision variables x (all O(1) after scaling is left to NLopt's bounds):
+///   [0, 5)     phase durations T_i, s
+///   [5, 11)    foot placements: right start (x, y), right landing (x, y), left landing (x, y), m
+///   then       leg joints: 12 cubic B-splines (RLEG_JOINT0-5, LLEG_JOINT0-5), free control points
+///   then       elastic ankle coordinates: 4 cubic B-splines, free control points
+/// The first three and the last three control points of every curve are tied (rest at start and
+/// end), so each curve has (spans + 3) - 4 free control points. The upper body holds half-sitting.
+///
+/// At every sample the floating base follows from the phase's anchor foot lying flat at its
+/// placement (robots::WholeBodyModel::anchorBase); in double support the other leg is solved by
+/// inverse kinematics onto its placement, and its spline is matched to that solution at the
+/// switching instants. Contact wrenches come from the base rows of inverse dynamics: in single
+/// support the stance wrench is unique; in double support the two wrenches are the minimum-norm
+/// split that also balances both elastic ankles. The elastic ankles are passive spring-dampers:
+/// their inverse-dynamics residual is constrained to zero in single support and holds by
+/// construction in double support.
+///
+/// Constraint rows are scaled to O(1); inequalities are g(x) <= 0, equalities h(x) = 0.
+
+#include <Eigen/Core>
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "overstep/core/obstacle.hpp"
+#include "overstep/core/plan.hpp"
+#include "overstep/planner/config.hpp"
+#include "overstep/robots/whole_body_model.hpp"
+
+namespace overstep::planner {
+
+enum class Family {
+  CoP = 0,
+  Friction,
+  Unilateral,
+  Clearance,
+  ObstacleCollision,
+  SelfCollision,
+  Pelvis,
+  JointLimits,
+  Velocity,
+  Torque,
+  Reach,
+  Dynamics,
+  Switching,
+  LiftOff,
+  kCount
+};
+const char* familyName(Family f);
+
+struct VariableLayout {
+  int durations = 0;
+  int feet = 5;
+  int legs = 11;
+  int flex = 0;
+  int free_cp = 0;
+  int total = 0;
+  static constexpr int kLegJoints = 12;
+  static constexpr int kFlex = 4;
+};
+
+struct Evaluation {
+  double objective = 0.0;
+  std::array<double, 11> terms{};  ///< weighted objective terms (objectiveTermNames order)
+  Eigen::VectorXd ineq;            ///< scaled, <= 0 when satisfied
+  Eigen::VectorXd eq;              ///< scaled, = 0 when satisfied
+  /// Largest violation per family (scaled units), index by Family.
+  std::array<double, static_cast<int>(Family::kCount)> worst{};
+};
+
+class OverstepProblem {
+ public:
+  OverstepProblem(const robots::WholeBodyModel& model, PlannerConfig config,
+                  core::ObstacleSpec obstacle);
+  ~OverstepProblem();
+  OverstepProblem(const OverstepProblem&) = delete;
+  OverstepProblem& operator=(const OverstepProblem&) = delete;
+
+  const VariableLayout& layout() const;
+  const PlannerConfig& config() const;
+  const core::ObstacleSpec& obstacle() const;
+  int inequalityCount() const;
+  int equalityCount() const;
+  const std::vector<Family>& inequalityFamilies() const;
+  const std::vector<Family>& equalityFamilies() const;
+  /// x of the start toes (front edge of the start soles); the obstacle gap is measured from it.
+  double toesX() const;
+
+  void bounds(Eigen::VectorXd& lower, Eigen::VectorXd& upper) const;
+  /// Homotopy parameters: the obstacle height in use and the CoP box side.
+  void setDifficulty(double obstacle_height, double cop_box);
+  double currentHeight() const;
+  double currentCopBox() const;
+
+  /// Kinematic initial guess: quasi-static whole-body IK on a dense grid (pelvis lowered, CoM over
+  /// the stance ankle, swing sole lifted vertically, carried over the obstacle top and set down),
+  /// then a least-squares fit of the splines.
+  Eigen::VectorXd initialGuess();
+
+  void evaluate(const Eigen::VectorXd& x, Evaluation& out);
+  /// Objective gradient and row Jacobians by forward differences, exploiting that a control
+  /// point only moves the samples inside its B-spline support; columns split over threads.
+  void derivatives(const Eigen::VectorXd& x, const Evaluation& at, Eigen::VectorXd& grad,
+                   Eigen::MatrixXd& jac_ineq, Eigen::MatrixXd& jac_eq);
+  int evaluationCount() const;
+
+  /// Dense samples of the motion at `rate` Hz (plus the planner's summary fields left empty).
+  core::Plan toPlan(const Eigen::VectorXd& x, double rate);
+
+  /// Phase durations, step length (m, right foot, start to landing) and foot spacing (m, lateral
+  /// distance of the landed feet) of x.
+  Eigen::VectorXd durations(const Eigen::VectorXd& x) const;
+  double stepLength(const Eigen::VectorXd& x) const;
+  double footSpacing(const Eigen::VectorXd& x) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace overstep::planner

@@ -1,0 +1,185 @@
+// The kinematic initial guess of the overstep problem (see OverstepProblem::initialGuess).
+#include <Eigen/QR>
+#include <cstdio>
+#include <cstdlib>
+
+#include "problem_impl.hpp"
+
+namespace overstep::planner {
+namespace {
+
+double smooth(double s) {
+  const double u = std::clamp(s, 0.0, 1.0);
+  return u * u * u * (10.0 + u * (-15.0 + 6.0 * u));  // quintic, zero vel/acc at the ends
+}
+
+Eigen::Vector2d lerp(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double s) {
+  return a + (b - a) * smooth(s);
+}
+
+}  // namespace
+
+Eigen::VectorXd OverstepProblem::initialGuess() {
+  Impl& m = *impl_;
+  const auto& c = m.cfg;
+  const auto& lay = m.lay;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(lay.total);
+  for (int i = 0; i < kPhaseCount; ++i) x(i) = c.duration_guess[static_cast<std::size_t>(i)];
+  const Eigen::Vector2d L0(0.0, c.start_half_width), R0(0.0, -c.start_half_width);
+  const Eigen::Vector2d R1(c.guess_step_length, -c.guess_half_width);
+  const Eigen::Vector2d L1(c.guess_step_length, c.guess_half_width);
+  x.segment<2>(lay.feet) = R0;
+  x.segment<2>(lay.feet + 2) = R1;
+  x.segment<2>(lay.feet + 4) = L1;
+
+  const PhaseTiming timing(x.head(kPhaseCount));
+  PhaseSpline spline(c.spline_intervals);
+  spline.setTiming(timing);
+  robots::WholeBodyModel& model = *m.ws.front().model;
+  const double z_rest = m.q_rest(5);
+  const double z_top = m.height + c.guess_swing_clearance;
+
+  const int M = 240;
+  Eigen::MatrixXd Y(16, M);
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(M, m.n_ctrl);
+  Eigen::VectorXd q = m.q_rest;
+  for (int k = 0; k < M; ++k) {
+    const double t = timing.total() * k / (M - 1);
+    const GridPoint g = timing.locate(t);
+    const double s = g.s;
+    double drop = c.guess_pelvis_drop;
+    if (g.phase == 0) drop *= smooth(s);
+    if (g.phase == 4) drop *= 1.0 - smooth(s);
+    Eigen::Vector2d com_target;
+    Eigen::Vector2d feet2[2] = {R0, L0};
+    double lift[2] = {0.0, 0.0};
+    auto swing = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b, int f) {
+      feet2[f] = lerp(a, b, (s - 0.25) / 0.5);
+      lift[f] = z_top * (smooth(s / 0.3) - smooth((s - 0.7) / 0.3));
+    };
+    switch (g.phase) {
+      case 0: com_target = lerp(0.5 * (L0 + R0), L0, s); break;
+      case 1:
+        com_target = L0;
+        swing(R0, R1, kRight);
+        break;
+      case 2:
+        com_target = lerp(L0, R1, s);
+        feet2[kRight] = R1;
+        break;
+      case 3:
+        com_target = R1;
+        feet2[kRight] = R1;
+        swing(L0, L1, kLeft);
+        break;
+      default:
+        com_target = lerp(R1, 0.5 * (R1 + L1), s);
+        feet2[kRight] = R1;
+        feet2[kLeft] = L1;
+        break;
+    }
+    Eigen::Vector2d pelvis = com_target;
+    for (int iter = 0; iter < 6; ++iter) {
+      q.head<6>().setZero();
+      q(3) = pelvis.x();
+      q(4) = pelvis.y();
+      q(5) = z_rest - drop;
+      for (int f = 0; f < 2; ++f) {
+        Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
+        target.translation() << feet2[f].x(), feet2[f].y(), lift[f];
+        int cols[6];
+        for (int j = 0; j < 6; ++j) cols[j] = m.leg_coord[static_cast<std::size_t>(6 * f + j)];
+        // Damped Newton inside the safe limits, from the previous solution and, if that stalls,
+        // again from half-sitting; the better result is kept.
+        auto solve = [&](Eigen::VectorXd& qs) {
+          double err = 0.0;
+          for (int it = 0; it < 60; ++it) {
+            model.setPositions(qs);
+            const core::Vector6d e = poseError(target, model.framePose(m.sole_frame[f]));
+            err = e.norm();
+            if (err < 1e-10) break;
+            const Eigen::MatrixXd Jf = model.frameJacobian(m.sole_frame[f]);
+            Eigen::Matrix<double, 6, 6> J;
+            for (int j = 0; j < 6; ++j) J.col(j) = Jf.col(cols[j]);
+            const Eigen::Matrix<double, 6, 6> A =
+                J.transpose() * J + 1e-6 * Eigen::Matrix<double, 6, 6>::Identity();
+            const Eigen::Matrix<double, 6, 1> dq = A.ldlt().solve(J.transpose() * e);
+            for (int j = 0; j < 6; ++j) {
+              const auto& aj = model.description().actuated[static_cast<std::size_t>(
+                  m.leg_act[static_cast<std::size_t>(6 * f + j)])];
+              qs(cols[j]) = std::clamp(qs(cols[j]) + dq(j), aj.safeLower(), aj.safeUpper());
+            }
+          }
+          return err;
+        };
+        Eigen::VectorXd qa = q;
+        const double ea = solve(qa);
+        if (ea > 1e-6) {
+          Eigen::VectorXd qb = q;
+          for (int j = 0; j < 6; ++j) qb(cols[j]) = m.q_rest(cols[j]);
+          if (solve(qb) < ea) qa = qb;
+        }
+        for (int j = 0; j < 6; ++j) q(cols[j]) = qa(cols[j]);
+      }
+      model.setPositions(q);
+      pelvis += com_target - model.com().head<2>();
+      // Quasi-static ankle deflection: the elastic joints carry the moment of their foot's share
+      // of the contact wrench (one Newton step per pass: d residual / d q_e = k).
+      const int n = model.dofs();
+      model.setVelocities(Eigen::VectorXd::Zero(n));
+      model.setAccelerations(Eigen::VectorXd::Zero(n));
+      State& st = m.ws.front().st;
+      st.q = q;
+      st.tau = model.inverseDynamics();
+      st.W_O = model.contactWrenchFromBase(st.tau);
+      const auto& ph = phaseTable()[static_cast<std::size_t>(g.phase)];
+      st.contact[kRight] = ph.right_contact;
+      st.contact[kLeft] = ph.left_contact;
+      for (int f = 0; f < 2; ++f) st.sole[f] = model.framePose(m.sole_frame[f]);
+      m.distributeWrench(m.ws.front());
+      for (int f = 0; f < 2; ++f) {
+        const Eigen::MatrixXd J = model.frameJacobian(m.sole_frame[f]);
+        for (int e = 0; e < 2; ++e) {
+          const int fc = m.flex_coord[static_cast<std::size_t>(2 * f + e)];
+          double r = st.tau(fc);
+          if (st.contact[f]) r -= J.col(fc).dot(st.wrench[f]);
+          const double stiff =
+              model.description().elastic[static_cast<std::size_t>(2 * f + e)].stiffness;
+          q(fc) = std::clamp(q(fc) - r / stiff, -0.1, 0.1);
+        }
+      }
+    }
+    for (int j = 0; j < 12; ++j) Y(j, k) = q(m.leg_coord[static_cast<std::size_t>(j)]);
+    for (int j = 0; j < 4; ++j) Y(12 + j, k) = q(m.flex_coord[static_cast<std::size_t>(j)]);
+    if (std::getenv("OVERSTEP_DEBUG_GUESS")) {
+      model.setPositions(q);
+      std::fprintf(stderr, "guess t=%.3f ph=%d com=(%.3f %.3f) target=(%.3f %.3f) R=(%.3f %.3f %.3f) L=(%.3f %.3f %.3f) q2=%.3f q3=%.3f q4=%.3f\n", t, g.phase, model.com().x(), model.com().y(), com_target.x(), com_target.y(), model.framePose(m.sole_frame[0]).translation().x(), model.framePose(m.sole_frame[0]).translation().y(), model.framePose(m.sole_frame[0]).translation().z(), model.framePose(m.sole_frame[1]).translation().x(), model.framePose(m.sole_frame[1]).translation().y(), model.framePose(m.sole_frame[1]).translation().z(), Y(2,k), Y(3,k), Y(4,k));
+    }
+    const PhaseSpline::Basis b = spline.evaluate(t);
+    B.block(k, b.first, 1, 4) = b.value.transpose();
+  }
+  // Least-squares fit of the free control points (ties: first three, last three).
+  const int F = lay.free_cp;
+  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(m.n_ctrl, F);
+  P.block(0, 0, 3, 1).setOnes();
+  for (int i = 1; i < F - 1; ++i) P(i + 2, i) = 1.0;
+  P.block(m.n_ctrl - 3, F - 1, 3, 1).setOnes();
+  Eigen::MatrixXd A(M + F, F);
+  A.topRows(M) = B * P;
+  A.bottomRows(F) = 1e-3 * Eigen::MatrixXd::Identity(F, F);
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  Eigen::VectorXd lo, hi;
+  bounds(lo, hi);
+  for (int j = 0; j < 16; ++j) {
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(M + F);
+    rhs.head(M) = Y.row(j).transpose();
+    // Regularise toward the mean rather than zero.
+    const double mean = Y.row(j).mean();
+    rhs.tail(F).setConstant(1e-3 * mean);
+    const int off = j < 12 ? lay.legs + j * F : lay.flex + (j - 12) * F;
+    x.segment(off, F) = qr.solve(rhs);
+  }
+  return x.cwiseMax(lo).cwiseMin(hi);
+}
+
+}  // namespace overstep::planner

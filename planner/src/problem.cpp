@@ -1,0 +1,175 @@
+#include "problem_impl.hpp"
+
+namespace overstep::planner {
+
+const char* familyName(Family f) {
+  static const char* names[] = {"cop",        "friction",      "unilateral", "clearance",
+                                "obstacle",   "self_collision", "pelvis",    "joint_limits",
+                                "velocity",   "torque",        "reach",      "dynamics",
+                                "switching",  "lift_off"};
+  return names[static_cast<int>(f)];
+}
+
+// ==================================================================== public interface
+OverstepProblem::OverstepProblem(const robots::WholeBodyModel& model, PlannerConfig config,
+                                 core::ObstacleSpec obstacle)
+    : impl_(std::make_unique<Impl>(model, std::move(config), obstacle)) {
+  core::validate(obstacle);
+  impl_->setUp();
+}
+OverstepProblem::~OverstepProblem() = default;
+
+const VariableLayout& OverstepProblem::layout() const { return impl_->lay; }
+const PlannerConfig& OverstepProblem::config() const { return impl_->cfg; }
+const core::ObstacleSpec& OverstepProblem::obstacle() const { return impl_->obstacle; }
+int OverstepProblem::inequalityCount() const { return impl_->n_ineq; }
+int OverstepProblem::equalityCount() const { return impl_->n_eq; }
+const std::vector<Family>& OverstepProblem::inequalityFamilies() const { return impl_->ineq_fam; }
+const std::vector<Family>& OverstepProblem::equalityFamilies() const { return impl_->eq_fam; }
+double OverstepProblem::toesX() const { return impl_->toes_x; }
+int OverstepProblem::evaluationCount() const { return impl_->evaluations.load(); }
+void OverstepProblem::setDifficulty(double h, double box) {
+  impl_->height = h;
+  impl_->cop_box = box;
+}
+double OverstepProblem::currentHeight() const { return impl_->height; }
+double OverstepProblem::currentCopBox() const { return impl_->cop_box; }
+
+void OverstepProblem::bounds(Eigen::VectorXd& lo, Eigen::VectorXd& hi) const {
+  const Impl& m = *impl_;
+  const auto& c = m.cfg;
+  const auto& lay = m.lay;
+  lo.resize(lay.total);
+  hi.resize(lay.total);
+  for (int i = 0; i < kPhaseCount; ++i) {
+    lo(i) = c.duration_min[static_cast<std::size_t>(i)];
+    hi(i) = c.duration_max[static_cast<std::size_t>(i)];
+  }
+  // right start, right landing, left landing
+  lo.segment<2>(lay.feet) << -0.03, -c.start_half_width - 0.05;
+  hi.segment<2>(lay.feet) << 0.03, -c.start_half_width + 0.05;
+  lo.segment<2>(lay.feet + 2) << c.step_length_min, -c.foot_y_max;
+  hi.segment<2>(lay.feet + 2) << c.step_length_max, -c.foot_y_min;
+  lo.segment<2>(lay.feet + 4) << c.step_length_min, c.foot_y_min;
+  hi.segment<2>(lay.feet + 4) << c.step_length_max, c.foot_y_max;
+  const auto& d = m.model_template.description();
+  for (int j = 0; j < 12; ++j) {
+    const auto& a = d.actuated[static_cast<std::size_t>(m.leg_act[static_cast<std::size_t>(j)])];
+    lo.segment(lay.legs + j * lay.free_cp, lay.free_cp).setConstant(a.safeLower());
+    hi.segment(lay.legs + j * lay.free_cp, lay.free_cp).setConstant(a.safeUpper());
+  }
+  lo.segment(lay.flex, 4 * lay.free_cp).setConstant(-0.15);
+  hi.segment(lay.flex, 4 * lay.free_cp).setConstant(0.15);
+}
+
+void OverstepProblem::evaluate(const Eigen::VectorXd& x, Evaluation& out) {
+  Impl& m = *impl_;
+  if (x.size() != m.lay.total) throw InputError("planner: wrong number of variables");
+  auto& w = m.ws.front();
+  m.evaluateAll(x, w, m.base_samples, m.base_events);
+  m.base_x = x;
+  m.assemble(w, m.base_samples, m.base_events, out);
+}
+
+void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at,
+                                  Eigen::VectorXd& grad, Eigen::MatrixXd& jin,
+                                  Eigen::MatrixXd& jeq) {
+  Impl& m = *impl_;
+  if (m.base_x.size() != x.size() || m.base_x != x) {
+    Evaluation tmp;
+    evaluate(x, tmp);
+  }
+  const int n = m.lay.total;
+  grad.setZero(n);
+  jin.setZero(m.n_ineq, n);
+  jeq.setZero(m.n_eq, n);
+  const auto& lay = m.lay;
+  std::atomic<int> next{0};
+  auto worker = [&](std::size_t wi) {
+    Impl::Workspace& w = m.ws[wi];
+    std::vector<SampleOut> local;
+    std::vector<Eigen::VectorXd> local_events;
+    SampleOut tmp;
+    Eigen::VectorXd tmp_event;
+    for (int j = next++; j < n; j = next++) {
+      Eigen::VectorXd xp = x;
+      const double hj = 1e-6 * std::max(1.0, std::abs(x(j)));
+      xp(j) += hj;
+      if (j < lay.legs) {  // durations and foot placements move everything
+        m.evaluateAll(xp, w, local, local_events);
+        Evaluation ev;
+        m.assemble(w, local, local_events, ev);
+        grad(j) = (ev.objective - at.objective) / hj;
+        jin.col(j) = (ev.ineq - at.ineq) / hj;
+        jeq.col(j) = (ev.eq - at.eq) / hj;
+        continue;
+      }
+      // A control point: only samples inside its B-spline support change.
+      m.decode(xp, w);
+      const int curve_off = j < lay.flex ? lay.legs : lay.flex;
+      const int fi = (j - curve_off) % lay.free_cp;
+      int c_lo = fi + 2, c_hi = fi + 2;
+      if (fi == 0) c_lo = 0;
+      if (fi == 0) c_hi = 2;
+      if (fi == lay.free_cp - 1) {
+        c_lo = m.n_ctrl - 3;
+        c_hi = m.n_ctrl - 1;
+      }
+      const auto& knots = w.spline->knots();
+      const double t_lo = knots(c_lo), t_hi = knots(c_hi + PhaseSpline::kDegree + 1);
+      std::vector<const SampleOut*> ptr(m.base_samples.size());
+      std::vector<SampleOut> changed;
+      std::vector<int> changed_k;
+      changed.reserve(m.grid.size());
+      for (std::size_t k = 0; k < m.grid.size(); ++k) {
+        const double t = w.timing->timeOf(m.grid[k].phase, m.grid[k].s);
+        if (t >= t_lo - 1e-12 && t <= t_hi + 1e-12) {
+          changed_k.push_back(static_cast<int>(k));
+          changed.emplace_back();
+        }
+      }
+      for (std::size_t i = 0; i < changed_k.size(); ++i)
+        m.sampleRows(w, changed_k[i], changed[i]);
+      for (std::size_t k = 0; k < m.grid.size(); ++k) ptr[k] = &m.base_samples[k];
+      for (std::size_t i = 0; i < changed_k.size(); ++i) {
+        const int k = changed_k[i];
+        ptr[static_cast<std::size_t>(k)] = &changed[i];
+        jin.col(j).segment(m.ineq_off[static_cast<std::size_t>(k)],
+                           m.ineq_cnt[static_cast<std::size_t>(k)]) =
+            (changed[i].ineq - m.base_samples[static_cast<std::size_t>(k)].ineq) / hj;
+        jeq.col(j).segment(m.eq_off[static_cast<std::size_t>(k)],
+                           m.eq_cnt[static_cast<std::size_t>(k)]) =
+            (changed[i].eq - m.base_samples[static_cast<std::size_t>(k)].eq) / hj;
+      }
+      grad(j) = (m.objective(w, ptr, nullptr) - at.objective) / hj;
+      static const int boundary[4] = {1, 2, 3, 4};
+      for (int e = 0; e < Impl::kEvents; ++e) {
+        const double te = w.timing->start(boundary[e]);
+        if (te < t_lo - 1e-12 || te > t_hi + 1e-12) continue;
+        m.eventRows(w, e, tmp_event);
+        jeq.col(j).segment(m.event_eq_off[e], m.event_eq_cnt[e]) =
+            (tmp_event - m.base_events[static_cast<std::size_t>(e)]) / hj;
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (std::size_t i = 1; i < m.ws.size(); ++i) threads.emplace_back(worker, i);
+  worker(0);
+  for (auto& t : threads) t.join();
+  // Workspace 0 holds the perturbed decode: restore the baseline decode for later use.
+  m.decode(x, m.ws.front());
+}
+
+Eigen::VectorXd OverstepProblem::durations(const Eigen::VectorXd& x) const {
+  return x.head(kPhaseCount);
+}
+double OverstepProblem::stepLength(const Eigen::VectorXd& x) const {
+  const auto& lay = impl_->lay;
+  return x(lay.feet + 2) - x(lay.feet);
+}
+double OverstepProblem::footSpacing(const Eigen::VectorXd& x) const {
+  const auto& lay = impl_->lay;
+  return x(lay.feet + 5) - x(lay.feet + 3);
+}
+
+}  // namespace overstep::planner

@@ -1,0 +1,692 @@
+#pragma once
+// Internal to the planner library: the problem's private state, shared by problem.cpp, guess.cpp
+// and to_plan.cpp. Not installed, not included by users.
+#include "overstep/planner/problem.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <Eigen/QR>
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "overstep/core/error.hpp"
+#include "overstep/core/wrench.hpp"
+#include "overstep/planner/collision.hpp"
+#include "overstep/planner/spline.hpp"
+
+namespace overstep::planner {
+namespace detail {
+
+inline constexpr int kRight = 0;
+inline constexpr int kLeft = 1;
+inline constexpr double kCopScale = 0.005;   // m, fixed scale of CoP rows
+inline constexpr double kDistScale = 0.05;   // m, scale of clearance/distance rows
+inline constexpr double kJointScale = 0.1;   // rad
+inline constexpr double kFlexTorqueScale = 5.0;  // N m
+inline constexpr double kKsSharpness = 40.0;
+
+/// Smooth maximum of values (KS), used to aggregate limit ratios into one row.
+inline double smoothMax(const Eigen::VectorXd& v, double rho) {
+  const double m = v.maxCoeff();
+  return m + std::log((rho * (v.array() - m)).exp().sum()) / rho;
+}
+
+inline double rollOf(const Eigen::Matrix3d& R) { return std::atan2(R(2, 1), R(2, 2)); }
+inline double pitchOf(const Eigen::Matrix3d& R) { return std::asin(std::clamp(-R(2, 0), -1.0, 1.0)); }
+inline double yawOf(const Eigen::Matrix3d& R) { return std::atan2(R(1, 0), R(0, 0)); }
+
+inline Eigen::Isometry3d placement(double x, double y) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.translation() << x, y, 0.0;
+  return X;
+}
+
+/// 6-D pose error of X relative to target, world-aligned [angular; linear].
+inline core::Vector6d poseError(const Eigen::Isometry3d& target, const Eigen::Isometry3d& X) {
+  core::Vector6d e;
+  const Eigen::AngleAxisd aa(target.linear() * X.linear().transpose());
+  e.head<3>() = aa.axis() * aa.angle();
+  e.tail<3>() = target.translation() - X.translation();
+  return e;
+}
+
+struct CapsuleRef {
+  int frame = -1;
+  Eigen::Vector3d p0, p1;
+  double radius = 0.0;
+  std::string link;
+};
+
+/// What one sample contributes.
+struct SampleOut {
+  Eigen::VectorXd ineq;
+  Eigen::VectorXd eq;
+  std::array<double, 11> terms{};  // unweighted, normalised, per unit time (except "time")
+  Eigen::VectorXd tau;             // actuated torques (for the torque-rate term)
+  double t = 0.0;
+};
+
+/// The full state of the robot at one instant, and the contact wrenches.
+struct State {
+  Eigen::VectorXd q, v, a, tau;
+  core::Vector6d wrench[2];  // [torque; force] about each sole origin, world frame
+  bool contact[2] = {false, false};
+  Eigen::Isometry3d sole[2];
+  core::Vector6d W_O;  // total contact wrench about the world origin
+  double ik_error = 0.0;
+  double reach = 0.0;  // hip-ankle distance of the IK leg
+  Eigen::Vector4d flex_residual = Eigen::Vector4d::Zero();  // DS elastic-ankle balance, N m
+};
+
+}  // namespace detail
+
+
+using namespace detail;  // NOLINT: internal header
+
+struct OverstepProblem::Impl {
+  robots::WholeBodyModel model_template;
+  PlannerConfig cfg;
+  core::ObstacleSpec obstacle;
+  double height = 0.2;
+  double cop_box = 0.01;
+  VariableLayout lay;
+  int n_ctrl = 0;  // control points per curve
+  double mass = 0.0, mg = 0.0, toes_x = 0.13;
+  std::array<int, 12> leg_coord{};  // model coordinates of RLEG_JOINT0-5, LLEG_JOINT0-5
+  std::array<int, 12> leg_act{};    // actuated indices
+  std::array<int, 4> flex_coord{};  // RLEG roll, pitch, LLEG roll, pitch
+  int sole_frame[2]{};
+  int hip_frame[2]{};    // hip pitch link origin (LINK2) per leg
+  int ankle_frame[2]{};  // ankle link origin (LINK4) per leg
+  int head_frame = -1;
+  int base_frame = -1;
+  core::FootDescription foot[2];
+  std::vector<CapsuleRef> caps;
+  std::vector<int> leg_caps[2];            // capsules of each leg (indices into caps)
+  std::vector<std::pair<int, int>> self_pairs;
+  ObstacleGeometry obstacle_geom;
+  Eigen::VectorXd q_rest;  // half-sitting (upper body posture held)
+
+  std::vector<GridPoint> grid;  // (phase, s); t filled per evaluation
+  std::vector<int> ineq_off, ineq_cnt, eq_off, eq_cnt;
+  std::vector<Family> ineq_fam, eq_fam;
+  int n_ineq = 0, n_eq = 0;
+  static constexpr int kEvents = 4;
+  int event_eq_off[kEvents]{};
+  int event_eq_cnt[kEvents]{};
+
+  struct Workspace {
+    std::unique_ptr<robots::WholeBodyModel> model;
+    std::unique_ptr<PhaseSpline> spline;
+    Eigen::MatrixXd legs_c, flex_c;  // full control points (12 x C, 4 x C)
+    Eigen::Vector2d feet[3];          // right start, right landing, left landing
+    std::unique_ptr<PhaseTiming> timing;
+    State st;
+  };
+  std::vector<Workspace> ws;
+  std::atomic<int> evaluations{0};
+
+  // Baseline cache (for finite differences).
+  std::vector<SampleOut> base_samples;
+  std::vector<Eigen::VectorXd> base_events;
+  Eigen::VectorXd base_x;
+
+  Impl(const robots::WholeBodyModel& m, PlannerConfig c, core::ObstacleSpec o)
+      : model_template(m), cfg(std::move(c)), obstacle(o) {}
+
+  // -------------------------------------------------------------- set-up
+  void setUp() {
+    const auto& d = model_template.description();
+    if (model_template.baseDofs() != 6 || d.feet.size() != 2) {
+      throw InputError("planner: needs a floating-base robot with two feet");
+    }
+    const char* legs[12] = {"RLEG_JOINT0", "RLEG_JOINT1", "RLEG_JOINT2", "RLEG_JOINT3",
+                            "RLEG_JOINT4", "RLEG_JOINT5", "LLEG_JOINT0", "LLEG_JOINT1",
+                            "LLEG_JOINT2", "LLEG_JOINT3", "LLEG_JOINT4", "LLEG_JOINT5"};
+    for (int i = 0; i < 12; ++i) {
+      const int a = d.actuatedIndex(legs[i]);
+      if (a < 0) throw InputError(std::string("planner: robot lacks joint ") + legs[i]);
+      leg_act[static_cast<std::size_t>(i)] = a;
+      leg_coord[static_cast<std::size_t>(i)] = model_template.actuatedCoordinate(a);
+    }
+    const char* flex[4] = {"RLEG_ELASTIC_ROLL", "RLEG_ELASTIC_PITCH", "LLEG_ELASTIC_ROLL",
+                           "LLEG_ELASTIC_PITCH"};
+    for (int i = 0; i < 4; ++i) {
+      const int e = d.elasticIndex(flex[i]);
+      if (e < 0) throw InputError(std::string("planner: robot lacks elastic joint ") + flex[i]);
+      flex_coord[static_cast<std::size_t>(i)] = model_template.elasticCoordinate(e);
+    }
+    foot[kRight] = *d.foot("right");
+    foot[kLeft] = *d.foot("left");
+    for (int f = 0; f < 2; ++f) {
+      sole_frame[f] = model_template.frameIndex(foot[f].sole_frame);
+      const std::string p = f == kRight ? "RLEG_" : "LLEG_";
+      hip_frame[f] = model_template.frameIndex(p + "LINK2");
+      ankle_frame[f] = model_template.frameIndex(p + "LINK4");
+    }
+    head_frame = model_template.hasFrame("head") ? model_template.frameIndex("head") : -1;
+    base_frame = model_template.frameIndex(d.base_link);
+    mass = model_template.totalMass();
+    mg = mass * d.gravity;
+    toes_x = foot[kLeft].sole.x_front;  // left start sole frame at x = 0
+    for (const auto& c : d.capsules) {
+      caps.push_back({model_template.frameIndex(c.link), c.p0, c.p1, c.radius, c.link});
+    }
+    auto capIndex = [&](const std::string& link) {
+      for (std::size_t i = 0; i < caps.size(); ++i)
+        if (caps[i].link == link) return static_cast<int>(i);
+      return -1;
+    };
+    for (int f = 0; f < 2; ++f) {
+      const std::string p = f == kRight ? "RLEG_" : "LLEG_";
+      for (const char* l : {"LINK2", "LINK3", "FOOT"}) {
+        const int i = capIndex(p + l);
+        if (i >= 0) leg_caps[f].push_back(i);
+      }
+    }
+    // Self-collision pairs that a stepping motion can bring together: legs with each other and
+    // the hanging arms with the thighs.
+    for (int a : leg_caps[kRight])
+      for (int b : leg_caps[kLeft]) self_pairs.emplace_back(a, b);
+    for (const char* arm : {"RARM_LINK3", "RARM_LINK6"}) {
+      const int a = capIndex(arm), b = capIndex("RLEG_LINK2");
+      if (a >= 0 && b >= 0) self_pairs.emplace_back(a, b);
+    }
+    for (const char* arm : {"LARM_LINK3", "LARM_LINK6"}) {
+      const int a = capIndex(arm), b = capIndex("LLEG_LINK2");
+      if (a >= 0 && b >= 0) self_pairs.emplace_back(a, b);
+    }
+    {
+      robots::WholeBodyModel tmp(model_template);
+      q_rest = tmp.halfSitting();
+    }
+    height = obstacle.height;
+    cop_box = cfg.cop_box;
+    obstacle_geom = ObstacleGeometry::fromSpec(obstacle, toes_x);
+
+    PhaseSpline probe(cfg.spline_intervals);
+    n_ctrl = probe.controlPointCount();
+    lay.free_cp = n_ctrl - 4;
+    if (lay.free_cp < 2) throw InputError("planner: spline_intervals too small");
+    lay.durations = 0;
+    lay.feet = kPhaseCount;
+    lay.legs = lay.feet + 6;
+    lay.flex = lay.legs + VariableLayout::kLegJoints * lay.free_cp;
+    lay.total = lay.flex + VariableLayout::kFlex * lay.free_cp;
+
+    // Grid and row layout.
+    Eigen::VectorXd d0(kPhaseCount);
+    for (int i = 0; i < kPhaseCount; ++i) d0(i) = cfg.duration_guess[static_cast<std::size_t>(i)];
+    grid = PhaseTiming(d0).grid(cfg.samples_per_phase);
+    for (const auto& g : grid) {
+      const auto& ph = phaseTable()[static_cast<std::size_t>(g.phase)];
+      const bool ds = ph.right_contact && ph.left_contact;
+      ineq_off.push_back(n_ineq);
+      eq_off.push_back(n_eq);
+      const int contacts = ds ? 2 : 1;
+      for (int c = 0; c < contacts; ++c) {
+        for (int r = 0; r < 4; ++r) ineq_fam.push_back(Family::CoP);
+        for (int r = 0; r < 6; ++r) ineq_fam.push_back(Family::Friction);
+        ineq_fam.push_back(Family::Unilateral);
+      }
+      if (!ds)
+        for (int r = 0; r < 4; ++r) ineq_fam.push_back(Family::Clearance);
+      ineq_fam.push_back(Family::ObstacleCollision);
+      ineq_fam.push_back(Family::SelfCollision);
+      for (int r = 0; r < 4; ++r) ineq_fam.push_back(Family::Pelvis);
+      ineq_fam.push_back(Family::Velocity);
+      ineq_fam.push_back(Family::Torque);
+      if (ds) {
+        for (int r = 0; r < 12; ++r) ineq_fam.push_back(Family::JointLimits);
+        ineq_fam.push_back(Family::Reach);
+      }
+      for (int r = 0; r < 4; ++r) eq_fam.push_back(Family::Dynamics);
+      ineq_cnt.push_back(static_cast<int>(ineq_fam.size()) - n_ineq);
+      eq_cnt.push_back(static_cast<int>(eq_fam.size()) - n_eq);
+      n_ineq = static_cast<int>(ineq_fam.size());
+      n_eq = static_cast<int>(eq_fam.size());
+    }
+    for (int e = 0; e < kEvents; ++e) {
+      event_eq_off[e] = n_eq;
+      for (int r = 0; r < 12; ++r) eq_fam.push_back(Family::Switching);
+      if (e == 0 || e == 2) eq_fam.push_back(Family::LiftOff);
+      event_eq_cnt[e] = static_cast<int>(eq_fam.size()) - n_eq;
+      n_eq = static_cast<int>(eq_fam.size());
+    }
+
+    const int threads = std::max(1, cfg.solver.threads);
+    ws.resize(static_cast<std::size_t>(threads));
+    for (auto& w : ws) {
+      w.model = std::make_unique<robots::WholeBodyModel>(model_template);
+      w.spline = std::make_unique<PhaseSpline>(cfg.spline_intervals);
+    }
+  }
+
+  // -------------------------------------------------------------- decoding x
+  void expand(const Eigen::VectorXd& x, int offset, Eigen::Ref<Eigen::RowVectorXd, 0, Eigen::InnerStride<>> c) const {
+    const int F = lay.free_cp;
+    c.head(3).setConstant(x(offset));
+    for (int i = 1; i < F - 1; ++i) c(i + 2) = x(offset + i);
+    c.tail(3).setConstant(x(offset + F - 1));
+  }
+
+  void decode(const Eigen::VectorXd& x, Workspace& w) const {
+    w.timing = std::make_unique<PhaseTiming>(x.head(kPhaseCount));
+    w.spline->setTiming(*w.timing);
+    w.legs_c.resize(12, n_ctrl);
+    w.flex_c.resize(4, n_ctrl);
+    for (int j = 0; j < 12; ++j) expand(x, lay.legs + j * lay.free_cp, w.legs_c.row(j));
+    for (int j = 0; j < 4; ++j) expand(x, lay.flex + j * lay.free_cp, w.flex_c.row(j));
+    for (int f = 0; f < 3; ++f) w.feet[f] = x.segment<2>(lay.feet + 2 * f);
+  }
+
+  Eigen::Isometry3d anchorPlacement(int phase, const Workspace& w) const {
+    if (phase <= 2) return placement(0.0, cfg.start_half_width);  // left start
+    return placement(w.feet[1].x(), w.feet[1].y());               // right landing
+  }
+  Eigen::Isometry3d otherPlacement(int phase, const Workspace& w) const {
+    if (phase == 0) return placement(w.feet[0].x(), w.feet[0].y());
+    if (phase == 2) return placement(w.feet[1].x(), w.feet[1].y());
+    return placement(w.feet[2].x(), w.feet[2].y());  // phase 4
+  }
+
+  /// Builds the robot state at time t in the contact configuration of `phase`.
+  void buildState(Workspace& w, int phase, double t) const {
+    robots::WholeBodyModel& m = *w.model;
+    State& st = w.st;
+    const int n = m.dofs();
+    st.q = q_rest;
+    st.v.setZero(n);
+    st.a.setZero(n);
+    const PhaseSpline::Basis b = w.spline->evaluate(t);
+    const auto legs = w.legs_c.middleCols(b.first, 4);
+    const auto flex = w.flex_c.middleCols(b.first, 4);
+    const Eigen::VectorXd lq = legs * b.value, lv = legs * b.d1, la = legs * b.d2;
+    const Eigen::VectorXd fq = flex * b.value, fv = flex * b.d1, fa = flex * b.d2;
+    for (int j = 0; j < 12; ++j) {
+      st.q(leg_coord[static_cast<std::size_t>(j)]) = lq(j);
+      st.v(leg_coord[static_cast<std::size_t>(j)]) = lv(j);
+      st.a(leg_coord[static_cast<std::size_t>(j)]) = la(j);
+    }
+    for (int j = 0; j < 4; ++j) {
+      st.q(flex_coord[static_cast<std::size_t>(j)]) = fq(j);
+      st.v(flex_coord[static_cast<std::size_t>(j)]) = fv(j);
+      st.a(flex_coord[static_cast<std::size_t>(j)]) = fa(j);
+    }
+    const auto& ph = phaseTable()[static_cast<std::size_t>(phase)];
+    const int anchor = ph.base_foot == Foot::Right ? kRight : kLeft;
+    const int other = 1 - anchor;
+    m.anchorBase(sole_frame[anchor], anchorPlacement(phase, w), st.q, st.v, st.a);
+    st.contact[kRight] = ph.right_contact;
+    st.contact[kLeft] = ph.left_contact;
+    st.ik_error = 0.0;
+    st.reach = 0.0;
+    if (ph.right_contact && ph.left_contact) solveOtherLeg(w, other, otherPlacement(phase, w));
+    st.tau = m.inverseDynamics();
+    st.W_O = m.contactWrenchFromBase(st.tau);
+    for (int f = 0; f < 2; ++f) st.sole[f] = m.framePose(sole_frame[f]);
+    distributeWrench(w);
+  }
+
+  /// Inverse kinematics of the non-anchor leg onto its placement (base fixed by the anchor), then
+  /// its velocities and accelerations from the foot's zero velocity and acceleration.
+  void solveOtherLeg(Workspace& w, int leg, const Eigen::Isometry3d& target) const {
+    robots::WholeBodyModel& m = *w.model;
+    State& st = w.st;
+    const int f = sole_frame[leg];
+    int cols[6];
+    for (int j = 0; j < 6; ++j) cols[j] = leg_coord[static_cast<std::size_t>(6 * leg + j)];
+    Eigen::Matrix<double, 6, 6> J;
+    for (int it = 0; it < 30; ++it) {
+      m.setPositions(st.q);
+      const core::Vector6d e = poseError(target, m.framePose(f));
+      st.ik_error = e.norm();
+      if (st.ik_error < 1e-11) break;
+      const Eigen::MatrixXd Jf = m.frameJacobian(f);
+      for (int j = 0; j < 6; ++j) J.col(j) = Jf.col(cols[j]);
+      // Damped least squares: stays finite at the reach limit.
+      const Eigen::Matrix<double, 6, 6> A =
+          J.transpose() * J + 1e-8 * Eigen::Matrix<double, 6, 6>::Identity();
+      const Eigen::Matrix<double, 6, 1> dq = A.ldlt().solve(J.transpose() * e);
+      for (int j = 0; j < 6; ++j) st.q(cols[j]) += dq(j);
+    }
+    m.setPositions(st.q);
+    const Eigen::MatrixXd Jf = m.frameJacobian(f);
+    for (int j = 0; j < 6; ++j) J.col(j) = Jf.col(cols[j]);
+    const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> lu(J);
+    for (int j = 0; j < 6; ++j) st.v(cols[j]) = 0.0;
+    const Eigen::Matrix<double, 6, 1> dv = -lu.solve(Jf * st.v);
+    for (int j = 0; j < 6; ++j) st.v(cols[j]) = dv(j);
+    for (int j = 0; j < 6; ++j) st.a(cols[j]) = 0.0;
+    m.setVelocities(st.v);
+    m.setAccelerations(st.a);
+    const Eigen::Matrix<double, 6, 1> da = -lu.solve(m.frameAcceleration(f));
+    for (int j = 0; j < 6; ++j) st.a(cols[j]) = da(j);
+    m.setAccelerations(st.a);
+    st.reach = (m.framePose(ankle_frame[leg]).translation() -
+                m.framePose(hip_frame[leg]).translation())
+                   .norm();
+  }
+
+  /// Contact wrenches at the sole origins from the total contact wrench (and, in double support,
+  /// the two elastic-ankle balances).
+  void distributeWrench(Workspace& w) const {
+    State& st = w.st;
+    robots::WholeBodyModel& m = *w.model;
+    st.wrench[kRight].setZero();
+    st.wrench[kLeft].setZero();
+    if (st.contact[kRight] != st.contact[kLeft]) {
+      const int f = st.contact[kRight] ? kRight : kLeft;
+      st.wrench[f] =
+          core::shiftWrench(st.W_O, Eigen::Vector3d::Zero(), st.sole[f].translation());
+      return;
+    }
+    // Unknowns z = [m_R f_R m_L f_L]; rows: sum (6) and the four elastic joints.
+    Eigen::Matrix<double, 10, 12> A = Eigen::Matrix<double, 10, 12>::Zero();
+    Eigen::Matrix<double, 10, 1> b;
+    for (int f = 0; f < 2; ++f) {
+      const Eigen::Vector3d p = st.sole[f].translation();
+      A.block<3, 3>(0, 6 * f).setIdentity();
+      Eigen::Matrix3d px;
+      px << 0, -p.z(), p.y(), p.z(), 0, -p.x(), -p.y(), p.x(), 0;
+      A.block<3, 3>(0, 6 * f + 3) = px;
+      A.block<3, 3>(3, 6 * f + 3).setIdentity();
+      const Eigen::MatrixXd J = m.frameJacobian(sole_frame[f]);
+      for (int e = 0; e < 2; ++e) {
+        const int c = flex_coord[static_cast<std::size_t>(2 * f + e)];
+        A.block<1, 6>(6 + 2 * f + e, 6 * f) = J.col(c).transpose();
+        b(6 + 2 * f + e) = st.tau(c);
+      }
+    }
+    b.head<6>() = st.W_O;
+    // Equality-constrained least squares: the sum is exact; the elastic-ankle balances are met as
+    // closely as a moderate force norm allows (they become equality rows of the problem, which
+    // the ankle-flex variables satisfy). An exact solve would be singular whenever the feet
+    // cannot balance a moment without ankle deflection (e.g. feet side by side in pitch).
+    constexpr double kRho = 100.0;
+    Eigen::Matrix<double, 12, 1> qw;
+    for (int f = 0; f < 2; ++f) {
+      qw.segment<3>(6 * f).setConstant(100.0);  // moments weigh as forces at a 0.1 m lever
+      qw.segment<3>(6 * f + 3).setConstant(1.0);
+    }
+    const Eigen::Matrix<double, 4, 12> Af = A.bottomRows<4>();
+    Eigen::Matrix<double, 18, 18> K = Eigen::Matrix<double, 18, 18>::Zero();
+    K.topLeftCorner<12, 12>() = kRho * Af.transpose() * Af;
+    K.topLeftCorner<12, 12>().diagonal() += qw;
+    K.block<12, 6>(0, 12) = A.topRows<6>().transpose();
+    K.block<6, 12>(12, 0) = A.topRows<6>();
+    Eigen::Matrix<double, 18, 1> rhs;
+    rhs.head<12>() = kRho * Af.transpose() * b.tail<4>();
+    rhs.tail<6>() = b.head<6>();
+    const Eigen::Matrix<double, 18, 1> z = K.partialPivLu().solve(rhs);
+    st.wrench[kRight] = z.head<6>();
+    st.wrench[kLeft] = z.segment<6>(6);
+    st.flex_residual = Af * z.head<12>() - b.tail<4>();
+  }
+
+  // -------------------------------------------------------------- rows of one sample
+  double minHeight(double s) const {
+    const double sn = std::sin(M_PI * s);
+    return cfg.swing_clearance * sn * sn;
+  }
+
+  void sampleRows(Workspace& w, int k, SampleOut& out) const {
+    const GridPoint& g = grid[static_cast<std::size_t>(k)];
+    const double t = w.timing->timeOf(g.phase, g.s);
+    buildState(w, g.phase, t);
+    robots::WholeBodyModel& m = *w.model;
+    const State& st = w.st;
+    const auto& d = model_template.description();
+    out.t = t;
+    out.ineq.resize(ineq_cnt[static_cast<std::size_t>(k)]);
+    out.eq.resize(eq_cnt[static_cast<std::size_t>(k)]);
+    int r = 0;
+    const double h = 0.5 * cop_box;
+    const double mu = cfg.friction / std::sqrt(2.0);
+    const bool ds = st.contact[kRight] && st.contact[kLeft];
+    for (int f = 0; f < 2; ++f) {
+      if (!st.contact[f]) continue;
+      const Eigen::Matrix3d Rt = st.sole[f].linear().transpose();
+      const Eigen::Vector3d mo = Rt * st.wrench[f].head<3>();
+      const Eigen::Vector3d fo = Rt * st.wrench[f].tail<3>();
+      const double s_cop = 1.0 / (mg * kCopScale);
+      out.ineq(r++) = (-mo.y() - h * fo.z()) * s_cop;  // cop_x <= h
+      out.ineq(r++) = (mo.y() - h * fo.z()) * s_cop;   // cop_x >= -h
+      out.ineq(r++) = (mo.x() - h * fo.z()) * s_cop;   // cop_y <= h
+      out.ineq(r++) = (-mo.x() - h * fo.z()) * s_cop;  // cop_y >= -h
+      out.ineq(r++) = (fo.x() - mu * fo.z()) / mg;
+      out.ineq(r++) = (-fo.x() - mu * fo.z()) / mg;
+      out.ineq(r++) = (fo.y() - mu * fo.z()) / mg;
+      out.ineq(r++) = (-fo.y() - mu * fo.z()) / mg;
+      out.ineq(r++) = (mo.z() - cfg.torsion * fo.z()) / (mg * cfg.torsion);
+      out.ineq(r++) = (-mo.z() - cfg.torsion * fo.z()) / (mg * cfg.torsion);
+      // Unilateral with a minimal normal force; an unloading foot may reach zero at lift-off.
+      double fmin = cfg.min_normal_force;
+      if ((g.phase == 0 && f == kRight) || (g.phase == 2 && f == kLeft)) fmin *= (1.0 - g.s);
+      out.ineq(r++) = (fmin - fo.z()) / mg;
+    }
+    if (!ds) {
+      const int sw = st.contact[kRight] ? kLeft : kRight;
+      const auto& sole = foot[sw].sole;
+      const double hmin = minHeight(g.s);
+      const double xs[2] = {sole.x_front, -sole.x_back};
+      const double ys[2] = {foot[sw].yMin(), foot[sw].yMax()};
+      for (double cx : xs)
+        for (double cy : ys) {
+          const Eigen::Vector3d c = st.sole[sw] * Eigen::Vector3d(cx, cy, 0.0);
+          out.ineq(r++) = (hmin - c.z()) / kDistScale;
+        }
+    }
+    // Capsules in the world.
+    std::vector<Capsule> wc(caps.size());
+    for (std::size_t i = 0; i < caps.size(); ++i) {
+      const Eigen::Isometry3d X = m.framePose(caps[i].frame);
+      wc[i] = {X * caps[i].p0, X * caps[i].p1, caps[i].radius};
+    }
+    {
+      Eigen::VectorXd dist(static_cast<Eigen::Index>(leg_caps[0].size() + leg_caps[1].size()));
+      Eigen::Index i = 0;
+      core::ObstacleSpec spec = obstacle;
+      spec.height = height;
+      const ObstacleGeometry og = ObstacleGeometry::fromSpec(spec, toes_x);
+      for (int f = 0; f < 2; ++f)
+        for (int c : leg_caps[f]) dist(i++) = obstacleDistance(wc[static_cast<std::size_t>(c)], og);
+      out.ineq(r++) = (cfg.obstacle_clearance - smoothMin(dist, cfg.smooth_min_rho)) / kDistScale;
+    }
+    {
+      Eigen::VectorXd dist(static_cast<Eigen::Index>(self_pairs.size()));
+      for (std::size_t i = 0; i < self_pairs.size(); ++i)
+        dist(static_cast<Eigen::Index>(i)) =
+            capsuleDistance(wc[static_cast<std::size_t>(self_pairs[i].first)],
+                            wc[static_cast<std::size_t>(self_pairs[i].second)]);
+      out.ineq(r++) = (cfg.self_clearance - smoothMin(dist, cfg.smooth_min_rho)) / kDistScale;
+    }
+    const Eigen::Matrix3d Rb = m.framePose(base_frame).linear();
+    const double roll = rollOf(Rb), pitch = pitchOf(Rb), eps = cfg.pelvis_tilt;
+    out.ineq(r++) = (roll - eps) / eps;
+    out.ineq(r++) = (-roll - eps) / eps;
+    out.ineq(r++) = (pitch - eps) / eps;
+    out.ineq(r++) = (-pitch - eps) / eps;
+    {
+      Eigen::VectorXd ratio(24);
+      for (int j = 0; j < 12; ++j) {
+        const auto& aj = d.actuated[static_cast<std::size_t>(leg_act[static_cast<std::size_t>(j)])];
+        const double qd = st.v(leg_coord[static_cast<std::size_t>(j)]);
+        ratio(2 * j) = qd / aj.velocity;
+        ratio(2 * j + 1) = -qd / aj.velocity;
+      }
+      out.ineq(r++) = smoothMax(ratio, kKsSharpness) - 1.0;
+    }
+    {
+      const int na = model_template.actuatedCount();
+      Eigen::VectorXd ratio(2 * na);
+      for (int j = 0; j < na; ++j) {
+        const double tq = st.tau(model_template.actuatedCoordinate(j));
+        ratio(2 * j) = tq / d.actuated[static_cast<std::size_t>(j)].torque;
+        ratio(2 * j + 1) = -ratio(2 * j);
+      }
+      out.ineq(r++) = smoothMax(ratio, kKsSharpness) - 1.0;
+    }
+    int e = 0;
+    if (ds) {
+      const int leg = phaseTable()[static_cast<std::size_t>(g.phase)].base_foot == Foot::Right
+                          ? kLeft
+                          : kRight;
+      for (int j = 0; j < 6; ++j) {
+        const int a = leg_act[static_cast<std::size_t>(6 * leg + j)];
+        const auto& aj = d.actuated[static_cast<std::size_t>(a)];
+        const double qj = st.q(model_template.actuatedCoordinate(a));
+        out.ineq(r++) = (qj - aj.safeUpper()) / kJointScale;
+        out.ineq(r++) = (aj.safeLower() - qj) / kJointScale;
+      }
+      out.ineq(r++) = (st.reach - cfg.leg_reach) / kDistScale;
+      for (int k2 = 0; k2 < 4; ++k2) out.eq(e++) = st.flex_residual(k2) / kFlexTorqueScale;
+    } else {
+      const int stance = st.contact[kRight] ? kRight : kLeft;
+      const Eigen::MatrixXd J = m.frameJacobian(sole_frame[stance]);
+      for (int f = 0; f < 2; ++f) {
+        for (int k2 = 0; k2 < 2; ++k2) {
+          const int c = flex_coord[static_cast<std::size_t>(2 * f + k2)];
+          double res = st.tau(c);
+          if (f == stance) res -= J.col(c).dot(st.wrench[f]);
+          out.eq(e++) = res / kFlexTorqueScale;
+        }
+      }
+    }
+    // Objective terms (per unit time, normalised).
+    auto& T = out.terms;
+    T.fill(0.0);
+    for (int j = 0; j < 4; ++j) {
+      const int c = flex_coord[static_cast<std::size_t>(j)];
+      T[0] += st.a(c) * st.a(c);
+      T[1] += st.v(c) * st.v(c) / 0.01;
+      T[2] += st.q(c) * st.q(c) / 1e-4;
+    }
+    const core::Vector6d hc = m.centroidalMomentum();
+    T[3] = (hc(2) / (mass * 0.1)) * (hc(2) / (mass * 0.1));
+    const Eigen::Vector3d cdd = m.comAcceleration();
+    T[4] = cdd.z() * cdd.z();
+    const Eigen::Vector3d com = m.com();
+    const core::Vector6d Wc = core::shiftWrench(st.W_O, Eigen::Vector3d::Zero(), com);
+    T[5] = (Wc(2) / 10.0) * (Wc(2) / 10.0);
+    for (int f = 0; f < 2; ++f) {
+      if (!st.contact[f]) continue;
+      const double mz = (st.sole[f].linear().transpose() * st.wrench[f].head<3>()).z();
+      T[6] += (mz / 5.0) * (mz / 5.0);
+    }
+    const Eigen::Vector2d zwb = core::zmpFromWrench(st.W_O);
+    const Eigen::Vector2d ztc = core::tableCartZmp(com, cdd, d.gravity);
+    T[7] = (zwb - ztc).squaredNorm() / 1e-4;
+    if (head_frame >= 0) {
+      const Eigen::Matrix3d Rh = m.framePose(head_frame).linear();
+      const double hy = yawOf(Rh), hp = pitchOf(Rh) - cfg.head_pitch_offset, hr = rollOf(Rh);
+      T[9] = (hy * hy + hp * hp + hr * hr) / 0.0025;
+    }
+    out.tau = st.tau.segment(6, model_template.actuatedCount());
+  }
+
+  /// Switching rows at event e (instants t1..t4): the spline of the leg that changes
+  /// representation matches the double-support IK in position and velocity; lift-off forces.
+  void eventRows(Workspace& w, int e, Eigen::VectorXd& out) const {
+    // e: 0 -> t1 (end of phase 0), 1 -> t2 (start of phase 2), 2 -> t3 (end of phase 2),
+    //    3 -> t4 (start of phase 4). The DS phase whose IK is matched, and the leg.
+    static const int ds_phase[4] = {0, 2, 2, 4};
+    static const int boundary[4] = {1, 2, 3, 4};
+    static const int leg_of[4] = {kRight, kRight, kRight, kLeft};
+    const double t = w.timing->start(boundary[e]);
+    buildState(w, ds_phase[e], t);
+    const State& st = w.st;
+    const PhaseSpline::Basis b = w.spline->evaluate(t);
+    const int leg = leg_of[e];
+    out.resize(event_eq_cnt[e]);
+    int r = 0;
+    for (int j = 0; j < 6; ++j) {
+      const int row = 6 * leg + j;
+      const double qs = w.legs_c.row(row).segment(b.first, 4).dot(b.value);
+      out(r++) = (qs - st.q(leg_coord[static_cast<std::size_t>(row)])) / 0.01;
+    }
+    for (int j = 0; j < 6; ++j) {
+      const int row = 6 * leg + j;
+      const double vs = w.legs_c.row(row).segment(b.first, 4).dot(b.d1);
+      out(r++) = (vs - st.v(leg_coord[static_cast<std::size_t>(row)])) / 0.1;
+    }
+    if (e == 0 || e == 2) {
+      const int lifting = e == 0 ? kRight : kLeft;
+      const double fz = (st.sole[lifting].linear().transpose() * st.wrench[lifting].tail<3>()).z();
+      out(r++) = fz / mg;
+    }
+  }
+
+  // -------------------------------------------------------------- assembly
+  double sampleWeight(const Workspace& w, int k) const {
+    const GridPoint& g = grid[static_cast<std::size_t>(k)];
+    if (k + 1 == static_cast<int>(grid.size())) return 0.0;
+    return w.timing->durations()(g.phase) /
+           cfg.samples_per_phase[static_cast<std::size_t>(g.phase)];
+  }
+
+  double objective(const Workspace& w, const std::vector<const SampleOut*>& s,
+                   std::array<double, 11>* terms) const {
+    std::array<double, 11> acc{};
+    const auto& names = objectiveTermNames();
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      const double wk = sampleWeight(w, static_cast<int>(k));
+      for (int i = 0; i < 11; ++i) acc[static_cast<std::size_t>(i)] += wk * s[k]->terms[static_cast<std::size_t>(i)];
+      if (k > 0) {
+        const double dt = s[k]->t - s[k - 1]->t;
+        if (dt > 1e-9) {
+          const double rate = ((s[k]->tau - s[k - 1]->tau) / dt).squaredNorm();
+          acc[10] += dt * rate / (1e4 * static_cast<double>(s[k]->tau.size()));
+        }
+      }
+    }
+    acc[8] = w.timing->total();
+    double f = 0.0;
+    for (int i = 0; i < 11; ++i) {
+      acc[static_cast<std::size_t>(i)] *= cfg.weights.at(names[static_cast<std::size_t>(i)]);
+      f += acc[static_cast<std::size_t>(i)];
+    }
+    if (terms) *terms = acc;
+    return f;
+  }
+
+  void evaluateAll(const Eigen::VectorXd& x, Workspace& w, std::vector<SampleOut>& samples,
+                   std::vector<Eigen::VectorXd>& events) {
+    decode(x, w);
+    samples.resize(grid.size());
+    for (std::size_t k = 0; k < grid.size(); ++k) sampleRows(w, static_cast<int>(k), samples[k]);
+    events.resize(kEvents);
+    for (int e = 0; e < kEvents; ++e) eventRows(w, e, events[static_cast<std::size_t>(e)]);
+    ++evaluations;
+  }
+
+  void assemble(const Workspace& w, const std::vector<SampleOut>& samples,
+                const std::vector<Eigen::VectorXd>& events, Evaluation& out) const {
+    out.ineq.resize(n_ineq);
+    out.eq.resize(n_eq);
+    std::vector<const SampleOut*> ptr;
+    for (std::size_t k = 0; k < samples.size(); ++k) {
+      out.ineq.segment(ineq_off[k], ineq_cnt[k]) = samples[k].ineq;
+      out.eq.segment(eq_off[k], eq_cnt[k]) = samples[k].eq;
+      ptr.push_back(&samples[k]);
+    }
+    for (int e = 0; e < kEvents; ++e)
+      out.eq.segment(event_eq_off[e], event_eq_cnt[e]) = events[static_cast<std::size_t>(e)];
+    out.objective = objective(w, ptr, &out.terms);
+    out.worst.fill(0.0);
+    for (int i = 0; i < n_ineq; ++i) {
+      auto& wv = out.worst[static_cast<std::size_t>(ineq_fam[static_cast<std::size_t>(i)])];
+      wv = std::max(wv, out.ineq(i));
+    }
+    for (int i = 0; i < n_eq; ++i) {
+      auto& wv = out.worst[static_cast<std::size_t>(eq_fam[static_cast<std::size_t>(i)])];
+      wv = std::max(wv, std::abs(out.eq(i)));
+    }
+  }
+};
+
+}  // namespace overstep::planner
