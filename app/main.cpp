@@ -7,7 +7,8 @@
 
 namespace overstep {
 void registerModelCommand(CLI::App& app, cli::Registry& registry);
-}
+void registerPlanCommands(CLI::App& app, cli::Registry& registry);
+}  // namespace overstep
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -18,10 +19,13 @@ int main(int argc, char** argv) {
       "Examples:\n"
       "  overstep model                      # print the HRP-2-class model summary\n"
       "  overstep model --json               # the same as one JSON object\n"
+      "  overstep plan --out plan.json       # plan the 20 cm x 11 cm overstep\n"
+      "  overstep check plan.json            # re-verify a plan on a 1 kHz grid\n"
       "  overstep <subcommand> --help        # options of one subcommand\n"
       "Exit codes: 0 ok, 1 internal error, 2 bad input, 3 infeasible request.");
   overstep::cli::Registry registry;
   overstep::registerModelCommand(app, registry);
+  overstep::registerPlanCommands(app, registry);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -244,9 +244,8 @@ Plan loadPlan(const std::string& path) {
   p.v = r.matrix(s, "v", dofs, n);
   p.a = r.matrix(s, "a", dofs, n);
   const json& tau0 = r.need(s, "tau", "samples.");
-  const int na = tau0.is_array() && !tau0.empty() && tau0[0].is_array()
-                     ? static_cast<int>(tau0[0].size())
-                     : 0;
+  const int na =
+      tau0.is_array() && !tau0.empty() && tau0[0].is_array() ? static_cast<int>(tau0[0].size()) : 0;
   p.tau = r.matrix(s, "tau", na, n);
   p.com = r.matrix(s, "com", 3, n);
   p.zmp_wholebody = r.matrix(s, "zmp_wholebody", 2, n);

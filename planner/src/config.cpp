@@ -23,8 +23,8 @@ class ConfigReader {
     try {
       v = n.as<double>();
     } catch (const YAML::Exception&) {
-      fail(key, "expected a number, got '" + (n.IsScalar() ? n.Scalar() : std::string("<node>")) +
-                    "'");
+      fail(key,
+           "expected a number, got '" + (n.IsScalar() ? n.Scalar() : std::string("<node>")) + "'");
     }
     if (!std::isfinite(v)) fail(key, "expected a finite number");
     return v;
@@ -57,11 +57,11 @@ class ConfigReader {
 
 }  // namespace
 
-const std::array<const char*, 11>& objectiveTermNames() {
-  static const std::array<const char*, 11> names = {
-      "elastic_acc", "elastic_vel",      "elastic_pos", "lin_mom_z", "lin_mom_z_rate",
-      "ang_mom_z_rate", "contact_torque_z", "zmp_lipm", "time",      "head",
-      "torque_rate"};
+const std::array<const char*, kObjectiveTerms>& objectiveTermNames() {
+  static const std::array<const char*, kObjectiveTerms> names = {
+      "elastic_acc",    "elastic_vel",    "elastic_pos",      "lin_mom_z",
+      "lin_mom_z_rate", "ang_mom_z_rate", "contact_torque_z", "zmp_lipm",
+      "time",           "head",           "torque_rate",      "ds_leg_tracking"};
   return names;
 }
 
@@ -87,6 +87,7 @@ std::string PlannerConfig::toJson() const {
   j["self_clearance"] = self_clearance;
   j["pelvis_tilt"] = pelvis_tilt;
   j["leg_reach"] = leg_reach;
+  j["limit_margin"] = limit_margin;
   j["weights"] = weights;
   j["head_pitch_offset"] = head_pitch_offset;
   j["solver"] = {{"algorithm", solver.algorithm},
@@ -94,7 +95,9 @@ std::string PlannerConfig::toJson() const {
                  {"constraint_tolerance", solver.constraint_tolerance},
                  {"ftol_rel", solver.ftol_rel},
                  {"time_limit", solver.time_limit},
-                 {"threads", solver.threads}};
+                 {"threads", solver.threads},
+                 {"trust_radius", solver.trust_radius},
+                 {"round_iterations", solver.round_iterations}};
   return j.dump();
 }
 
@@ -111,35 +114,50 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
   if (root.IsNull()) return c;
   if (!root.IsMap()) throw InputError(path + ": expected a YAML map at the top level");
   ConfigReader r(path);
-  const std::set<std::string> scalars = {
-      "start_half_width", "step_length_min",    "step_length_max",    "foot_y_min",
-      "foot_y_max",       "guess_step_length",  "guess_half_width",   "guess_pelvis_drop",
-      "guess_swing_clearance", "cop_box",       "friction",           "torsion",
-      "min_normal_force", "swing_clearance",    "obstacle_clearance", "self_clearance",
-      "pelvis_tilt",      "leg_reach",          "smooth_min_rho",     "height_homotopy_step",
-      "head_pitch_offset"};
-  std::map<std::string, double*> fields = {
-      {"start_half_width", &c.start_half_width},
-      {"step_length_min", &c.step_length_min},
-      {"step_length_max", &c.step_length_max},
-      {"foot_y_min", &c.foot_y_min},
-      {"foot_y_max", &c.foot_y_max},
-      {"guess_step_length", &c.guess_step_length},
-      {"guess_half_width", &c.guess_half_width},
-      {"guess_pelvis_drop", &c.guess_pelvis_drop},
-      {"guess_swing_clearance", &c.guess_swing_clearance},
-      {"cop_box", &c.cop_box},
-      {"friction", &c.friction},
-      {"torsion", &c.torsion},
-      {"min_normal_force", &c.min_normal_force},
-      {"swing_clearance", &c.swing_clearance},
-      {"obstacle_clearance", &c.obstacle_clearance},
-      {"self_clearance", &c.self_clearance},
-      {"pelvis_tilt", &c.pelvis_tilt},
-      {"leg_reach", &c.leg_reach},
-      {"smooth_min_rho", &c.smooth_min_rho},
-      {"height_homotopy_step", &c.height_homotopy_step},
-      {"head_pitch_offset", &c.head_pitch_offset}};
+  const std::set<std::string> scalars = {"start_half_width",
+                                         "step_length_min",
+                                         "step_length_max",
+                                         "foot_y_min",
+                                         "foot_y_max",
+                                         "guess_step_length",
+                                         "guess_half_width",
+                                         "guess_pelvis_drop",
+                                         "guess_swing_clearance",
+                                         "cop_box",
+                                         "friction",
+                                         "torsion",
+                                         "min_normal_force",
+                                         "swing_clearance",
+                                         "obstacle_clearance",
+                                         "self_clearance",
+                                         "pelvis_tilt",
+                                         "leg_reach",
+                                         "smooth_min_rho",
+                                         "height_homotopy_step",
+                                         "head_pitch_offset",
+                                         "limit_margin"};
+  std::map<std::string, double*> fields = {{"start_half_width", &c.start_half_width},
+                                           {"step_length_min", &c.step_length_min},
+                                           {"step_length_max", &c.step_length_max},
+                                           {"foot_y_min", &c.foot_y_min},
+                                           {"foot_y_max", &c.foot_y_max},
+                                           {"guess_step_length", &c.guess_step_length},
+                                           {"guess_half_width", &c.guess_half_width},
+                                           {"guess_pelvis_drop", &c.guess_pelvis_drop},
+                                           {"guess_swing_clearance", &c.guess_swing_clearance},
+                                           {"cop_box", &c.cop_box},
+                                           {"friction", &c.friction},
+                                           {"torsion", &c.torsion},
+                                           {"min_normal_force", &c.min_normal_force},
+                                           {"swing_clearance", &c.swing_clearance},
+                                           {"obstacle_clearance", &c.obstacle_clearance},
+                                           {"self_clearance", &c.self_clearance},
+                                           {"pelvis_tilt", &c.pelvis_tilt},
+                                           {"leg_reach", &c.leg_reach},
+                                           {"smooth_min_rho", &c.smooth_min_rho},
+                                           {"height_homotopy_step", &c.height_homotopy_step},
+                                           {"head_pitch_offset", &c.head_pitch_offset},
+                                           {"limit_margin", &c.limit_margin}};
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>();
     const YAML::Node& v = kv.second;
@@ -185,6 +203,10 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
           c.solver.time_limit = r.positive(s.second, k);
         } else if (name == "threads") {
           c.solver.threads = static_cast<int>(r.positive(s.second, k));
+        } else if (name == "trust_radius") {
+          c.solver.trust_radius = r.positive(s.second, k);
+        } else if (name == "round_iterations") {
+          c.solver.round_iterations = static_cast<int>(r.positive(s.second, k));
         } else {
           r.fail(k, "unknown key");
         }
@@ -200,6 +222,7 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
   }
   if (!(c.step_length_min < c.step_length_max)) r.fail("step_length_min", "expected < max");
   if (!(c.foot_y_min < c.foot_y_max)) r.fail("foot_y_min", "expected < foot_y_max");
+  if (c.limit_margin > 1.0) r.fail("limit_margin", "expected a fraction in (0, 1]");
   return c;
 }
 

@@ -58,7 +58,9 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
       lift[f] = z_top * (smooth(s / 0.3) - smooth((s - 0.7) / 0.3));
     };
     switch (g.phase) {
-      case 0: com_target = lerp(0.5 * (L0 + R0), L0, s); break;
+      case 0:
+        com_target = lerp(0.5 * (L0 + R0), L0, s);
+        break;
       case 1:
         com_target = L0;
         swing(R0, R1, kRight);
@@ -79,11 +81,7 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
         break;
     }
     Eigen::Vector2d pelvis = com_target;
-    for (int iter = 0; iter < 6; ++iter) {
-      q.head<6>().setZero();
-      q(3) = pelvis.x();
-      q(4) = pelvis.y();
-      q(5) = z_rest - drop;
+    auto solveLegs = [&]() {
       for (int f = 0; f < 2; ++f) {
         Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
         target.translation() << feet2[f].x(), feet2[f].y(), lift[f];
@@ -121,6 +119,13 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
         }
         for (int j = 0; j < 6; ++j) q(cols[j]) = qa(cols[j]);
       }
+    };
+    for (int iter = 0; iter < 6; ++iter) {
+      q.head<6>().setZero();
+      q(3) = pelvis.x();
+      q(4) = pelvis.y();
+      q(5) = z_rest - drop;
+      solveLegs();
       model.setPositions(q);
       pelvis += com_target - model.com().head<2>();
       // Quasi-static ankle deflection: the elastic joints carry the moment of their foot's share
@@ -149,11 +154,21 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
         }
       }
     }
+    solveLegs();  // the feet flat again over the final ankle deflection
     for (int j = 0; j < 12; ++j) Y(j, k) = q(m.leg_coord[static_cast<std::size_t>(j)]);
     for (int j = 0; j < 4; ++j) Y(12 + j, k) = q(m.flex_coord[static_cast<std::size_t>(j)]);
     if (std::getenv("OVERSTEP_DEBUG_GUESS")) {
       model.setPositions(q);
-      std::fprintf(stderr, "guess t=%.3f ph=%d com=(%.3f %.3f) target=(%.3f %.3f) R=(%.3f %.3f %.3f) L=(%.3f %.3f %.3f) q2=%.3f q3=%.3f q4=%.3f\n", t, g.phase, model.com().x(), model.com().y(), com_target.x(), com_target.y(), model.framePose(m.sole_frame[0]).translation().x(), model.framePose(m.sole_frame[0]).translation().y(), model.framePose(m.sole_frame[0]).translation().z(), model.framePose(m.sole_frame[1]).translation().x(), model.framePose(m.sole_frame[1]).translation().y(), model.framePose(m.sole_frame[1]).translation().z(), Y(2,k), Y(3,k), Y(4,k));
+      std::fprintf(stderr,
+                   "guess t=%.3f ph=%d com=(%.3f %.3f) target=(%.3f %.3f) R=(%.3f %.3f %.3f) "
+                   "L=(%.3f %.3f %.3f) q2=%.3f q3=%.3f q4=%.3f\n",
+                   t, g.phase, model.com().x(), model.com().y(), com_target.x(), com_target.y(),
+                   model.framePose(m.sole_frame[0]).translation().x(),
+                   model.framePose(m.sole_frame[0]).translation().y(),
+                   model.framePose(m.sole_frame[0]).translation().z(),
+                   model.framePose(m.sole_frame[1]).translation().x(),
+                   model.framePose(m.sole_frame[1]).translation().y(),
+                   model.framePose(m.sole_frame[1]).translation().z(), Y(2, k), Y(3, k), Y(4, k));
     }
     const PhaseSpline::Basis b = spline.evaluate(t);
     B.block(k, b.first, 1, 4) = b.value.transpose();

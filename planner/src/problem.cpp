@@ -3,10 +3,10 @@
 namespace overstep::planner {
 
 const char* familyName(Family f) {
-  static const char* names[] = {"cop",        "friction",      "unilateral", "clearance",
-                                "obstacle",   "self_collision", "pelvis",    "joint_limits",
-                                "velocity",   "torque",        "reach",      "dynamics",
-                                "switching",  "lift_off"};
+  static const char* names[] = {"cop",       "friction",       "unilateral", "clearance",
+                                "obstacle",  "self_collision", "pelvis",     "joint_limits",
+                                "velocity",  "torque",         "reach",      "dynamics",
+                                "switching", "lift_off"};
   return names[static_cast<int>(f)];
 }
 
@@ -60,6 +60,16 @@ void OverstepProblem::bounds(Eigen::VectorXd& lo, Eigen::VectorXd& hi) const {
   }
   lo.segment(lay.flex, 4 * lay.free_cp).setConstant(-0.15);
   hi.segment(lay.flex, 4 * lay.free_cp).setConstant(0.15);
+}
+
+Eigen::VectorXd OverstepProblem::variableScale() const {
+  const auto& lay = impl_->lay;
+  Eigen::VectorXd d(lay.total);
+  d.head(kPhaseCount).setConstant(0.3);                         // s
+  d.segment(lay.feet, 6).setConstant(0.05);                     // m
+  d.segment(lay.legs, lay.flex - lay.legs).setConstant(0.2);    // rad
+  d.segment(lay.flex, lay.total - lay.flex).setConstant(0.01);  // rad: stiff springs
+  return d;
 }
 
 void OverstepProblem::evaluate(const Eigen::VectorXd& x, Evaluation& out) {
@@ -128,8 +138,7 @@ void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at
           changed.emplace_back();
         }
       }
-      for (std::size_t i = 0; i < changed_k.size(); ++i)
-        m.sampleRows(w, changed_k[i], changed[i]);
+      for (std::size_t i = 0; i < changed_k.size(); ++i) m.sampleRows(w, changed_k[i], changed[i]);
       for (std::size_t k = 0; k < m.grid.size(); ++k) ptr[k] = &m.base_samples[k];
       for (std::size_t i = 0; i < changed_k.size(); ++i) {
         const int k = changed_k[i];
@@ -158,6 +167,35 @@ void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at
   for (auto& t : threads) t.join();
   // Workspace 0 holds the perturbed decode: restore the baseline decode for later use.
   m.decode(x, m.ws.front());
+}
+
+std::string OverstepProblem::describeRow(const Eigen::VectorXd& x, bool equality, int row) const {
+  const Impl& m = *impl_;
+  const PhaseTiming timing(x.head(kPhaseCount));
+  const auto& fam = equality ? m.eq_fam : m.ineq_fam;
+  if (row < 0 || row >= static_cast<int>(fam.size())) return "?";
+  std::string where;
+  char buf[160];
+  const auto& off = equality ? m.eq_off : m.ineq_off;
+  const auto& cnt = equality ? m.eq_cnt : m.ineq_cnt;
+  for (std::size_t k = 0; k < m.grid.size(); ++k) {
+    if (row >= off[k] && row < off[k] + cnt[k]) {
+      const GridPoint& g = m.grid[k];
+      std::snprintf(buf, sizeof buf, "%s at t = %.3f s (%s, row %d of sample %zu)",
+                    familyName(fam[static_cast<std::size_t>(row)]), timing.timeOf(g.phase, g.s),
+                    phaseTable()[static_cast<std::size_t>(g.phase)].name, row - off[k], k);
+      return buf;
+    }
+  }
+  for (int e = 0; e < Impl::kEvents; ++e) {
+    if (row >= m.event_eq_off[e] && row < m.event_eq_off[e] + m.event_eq_cnt[e]) {
+      std::snprintf(buf, sizeof buf, "%s at t = %.3f s (switch %d, row %d)",
+                    familyName(fam[static_cast<std::size_t>(row)]), timing.start(e + 1), e + 1,
+                    row - m.event_eq_off[e]);
+      return buf;
+    }
+  }
+  return familyName(fam[static_cast<std::size_t>(row)]);
 }
 
 Eigen::VectorXd OverstepProblem::durations(const Eigen::VectorXd& x) const {

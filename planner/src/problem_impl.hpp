@@ -6,9 +6,12 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <Eigen/QR>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <thread>
@@ -23,9 +26,9 @@ namespace detail {
 
 inline constexpr int kRight = 0;
 inline constexpr int kLeft = 1;
-inline constexpr double kCopScale = 0.005;   // m, fixed scale of CoP rows
-inline constexpr double kDistScale = 0.05;   // m, scale of clearance/distance rows
-inline constexpr double kJointScale = 0.1;   // rad
+inline constexpr double kCopScale = 0.005;       // m, fixed scale of CoP rows
+inline constexpr double kDistScale = 0.05;       // m, scale of clearance/distance rows
+inline constexpr double kJointScale = 0.1;       // rad
 inline constexpr double kFlexTorqueScale = 5.0;  // N m
 inline constexpr double kKsSharpness = 40.0;
 
@@ -36,7 +39,9 @@ inline double smoothMax(const Eigen::VectorXd& v, double rho) {
 }
 
 inline double rollOf(const Eigen::Matrix3d& R) { return std::atan2(R(2, 1), R(2, 2)); }
-inline double pitchOf(const Eigen::Matrix3d& R) { return std::asin(std::clamp(-R(2, 0), -1.0, 1.0)); }
+inline double pitchOf(const Eigen::Matrix3d& R) {
+  return std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
+}
 inline double yawOf(const Eigen::Matrix3d& R) { return std::atan2(R(1, 0), R(0, 0)); }
 
 inline Eigen::Isometry3d placement(double x, double y) {
@@ -65,8 +70,8 @@ struct CapsuleRef {
 struct SampleOut {
   Eigen::VectorXd ineq;
   Eigen::VectorXd eq;
-  std::array<double, 11> terms{};  // unweighted, normalised, per unit time (except "time")
-  Eigen::VectorXd tau;             // actuated torques (for the torque-rate term)
+  std::array<double, kObjectiveTerms> terms{};  // unweighted, normalised, per unit time
+  Eigen::VectorXd tau;                          // actuated torques (for the torque-rate term)
   double t = 0.0;
 };
 
@@ -78,12 +83,13 @@ struct State {
   Eigen::Isometry3d sole[2];
   core::Vector6d W_O;  // total contact wrench about the world origin
   double ik_error = 0.0;
-  double reach = 0.0;  // hip-ankle distance of the IK leg
+  double reach = 0.0;                                       // hip-ankle distance of the IK leg
   Eigen::Vector4d flex_residual = Eigen::Vector4d::Zero();  // DS elastic-ankle balance, N m
+  double ds_balance = 0.0;   // DS: unreachable ankle-moment balance about the feet's line, N m
+  double ik_seed_gap = 0.0;  // DS: |IK leg - its spline|^2, rad^2
 };
 
 }  // namespace detail
-
 
 using namespace detail;  // NOLINT: internal header
 
@@ -106,7 +112,7 @@ struct OverstepProblem::Impl {
   int base_frame = -1;
   core::FootDescription foot[2];
   std::vector<CapsuleRef> caps;
-  std::vector<int> leg_caps[2];            // capsules of each leg (indices into caps)
+  std::vector<int> leg_caps[2];  // capsules of each leg (indices into caps)
   std::vector<std::pair<int, int>> self_pairs;
   ObstacleGeometry obstacle_geom;
   Eigen::VectorXd q_rest;  // half-sitting (upper body posture held)
@@ -123,7 +129,7 @@ struct OverstepProblem::Impl {
     std::unique_ptr<robots::WholeBodyModel> model;
     std::unique_ptr<PhaseSpline> spline;
     Eigen::MatrixXd legs_c, flex_c;  // full control points (12 x C, 4 x C)
-    Eigen::Vector2d feet[3];          // right start, right landing, left landing
+    Eigen::Vector2d feet[3];         // right start, right landing, left landing
     std::unique_ptr<PhaseTiming> timing;
     State st;
   };
@@ -221,7 +227,14 @@ struct OverstepProblem::Impl {
     // Grid and row layout.
     Eigen::VectorXd d0(kPhaseCount);
     for (int i = 0; i < kPhaseCount; ++i) d0(i) = cfg.duration_guess[static_cast<std::size_t>(i)];
-    grid = PhaseTiming(d0).grid(cfg.samples_per_phase);
+    // Each phase is sampled on its closed interval (s = 0 .. 1): the end of a phase obeys that
+    // phase's dynamics (e.g. the stance ankle right up to touchdown, the lifting foot's wrench
+    // vanishing at lift-off) and the start of the next obeys its own.
+    (void)d0;
+    for (int i = 0; i < kPhaseCount; ++i) {
+      const int nph = cfg.samples_per_phase[static_cast<std::size_t>(i)];
+      for (int k = 0; k <= nph; ++k) grid.push_back({i, static_cast<double>(k) / nph, 0.0});
+    }
     for (const auto& g : grid) {
       const auto& ph = phaseTable()[static_cast<std::size_t>(g.phase)];
       const bool ds = ph.right_contact && ph.left_contact;
@@ -244,7 +257,7 @@ struct OverstepProblem::Impl {
         for (int r = 0; r < 12; ++r) ineq_fam.push_back(Family::JointLimits);
         ineq_fam.push_back(Family::Reach);
       }
-      for (int r = 0; r < 4; ++r) eq_fam.push_back(Family::Dynamics);
+      for (int r = 0; r < (ds ? 1 : 4); ++r) eq_fam.push_back(Family::Dynamics);
       ineq_cnt.push_back(static_cast<int>(ineq_fam.size()) - n_ineq);
       eq_cnt.push_back(static_cast<int>(eq_fam.size()) - n_eq);
       n_ineq = static_cast<int>(ineq_fam.size());
@@ -267,7 +280,8 @@ struct OverstepProblem::Impl {
   }
 
   // -------------------------------------------------------------- decoding x
-  void expand(const Eigen::VectorXd& x, int offset, Eigen::Ref<Eigen::RowVectorXd, 0, Eigen::InnerStride<>> c) const {
+  void expand(const Eigen::VectorXd& x, int offset,
+              Eigen::Ref<Eigen::RowVectorXd, 0, Eigen::InnerStride<>> c) const {
     const int F = lay.free_cp;
     c.head(3).setConstant(x(offset));
     for (int i = 1; i < F - 1; ++i) c(i + 2) = x(offset + i);
@@ -325,7 +339,17 @@ struct OverstepProblem::Impl {
     st.contact[kLeft] = ph.left_contact;
     st.ik_error = 0.0;
     st.reach = 0.0;
-    if (ph.right_contact && ph.left_contact) solveOtherLeg(w, other, otherPlacement(phase, w));
+    st.ik_seed_gap = 0.0;
+    if (ph.right_contact && ph.left_contact) {
+      Eigen::Matrix<double, 6, 1> seed;
+      for (int j = 0; j < 6; ++j)
+        seed(j) = st.q(leg_coord[static_cast<std::size_t>(6 * other + j)]);
+      solveOtherLeg(w, other, otherPlacement(phase, w));
+      for (int j = 0; j < 6; ++j) {
+        const double gap = st.q(leg_coord[static_cast<std::size_t>(6 * other + j)]) - seed(j);
+        st.ik_seed_gap += gap * gap;
+      }
+    }
     st.tau = m.inverseDynamics();
     st.W_O = m.contactWrenchFromBase(st.tau);
     for (int f = 0; f < 2; ++f) st.sole[f] = m.framePose(sole_frame[f]);
@@ -352,7 +376,12 @@ struct OverstepProblem::Impl {
       const Eigen::Matrix<double, 6, 6> A =
           J.transpose() * J + 1e-8 * Eigen::Matrix<double, 6, 6>::Identity();
       const Eigen::Matrix<double, 6, 1> dq = A.ldlt().solve(J.transpose() * e);
-      for (int j = 0; j < 6; ++j) st.q(cols[j]) += dq(j);
+      for (int j = 0; j < 6; ++j) {
+        const auto& aj =
+            model_template.description()
+                .actuated[static_cast<std::size_t>(leg_act[static_cast<std::size_t>(6 * leg + j)])];
+        st.q(cols[j]) = std::clamp(st.q(cols[j]) + dq(j), aj.lower, aj.upper);
+      }
     }
     m.setPositions(st.q);
     const Eigen::MatrixXd Jf = m.frameJacobian(f);
@@ -367,9 +396,9 @@ struct OverstepProblem::Impl {
     const Eigen::Matrix<double, 6, 1> da = -lu.solve(m.frameAcceleration(f));
     for (int j = 0; j < 6; ++j) st.a(cols[j]) = da(j);
     m.setAccelerations(st.a);
-    st.reach = (m.framePose(ankle_frame[leg]).translation() -
-                m.framePose(hip_frame[leg]).translation())
-                   .norm();
+    st.reach =
+        (m.framePose(ankle_frame[leg]).translation() - m.framePose(hip_frame[leg]).translation())
+            .norm();
   }
 
   /// Contact wrenches at the sole origins from the total contact wrench (and, in double support,
@@ -381,8 +410,7 @@ struct OverstepProblem::Impl {
     st.wrench[kLeft].setZero();
     if (st.contact[kRight] != st.contact[kLeft]) {
       const int f = st.contact[kRight] ? kRight : kLeft;
-      st.wrench[f] =
-          core::shiftWrench(st.W_O, Eigen::Vector3d::Zero(), st.sole[f].translation());
+      st.wrench[f] = core::shiftWrench(st.W_O, Eigen::Vector3d::Zero(), st.sole[f].translation());
       return;
     }
     // Unknowns z = [m_R f_R m_L f_L]; rows: sum (6) and the four elastic joints.
@@ -403,29 +431,47 @@ struct OverstepProblem::Impl {
       }
     }
     b.head<6>() = st.W_O;
-    // Equality-constrained least squares: the sum is exact; the elastic-ankle balances are met as
-    // closely as a moderate force norm allows (they become equality rows of the problem, which
-    // the ankle-flex variables satisfy). An exact solve would be singular whenever the feet
-    // cannot balance a moment without ankle deflection (e.g. feet side by side in pitch).
-    constexpr double kRho = 100.0;
-    Eigen::Matrix<double, 12, 1> qw;
+    // The sum is exact (Newton-Euler). The remaining six internal degrees of freedom balance the
+    // four elastic ankles through a damped pseudo-inverse: exact whenever the feet can balance
+    // them, and a residual (an equality row of the problem, met by the ankle-flex variables) in
+    // the directions they cannot, e.g. pitch with the feet side by side. Moments are weighted as
+    // forces at a 0.1 m lever.
+    Eigen::Matrix<double, 12, 1> qh_inv;
     for (int f = 0; f < 2; ++f) {
-      qw.segment<3>(6 * f).setConstant(100.0);  // moments weigh as forces at a 0.1 m lever
-      qw.segment<3>(6 * f + 3).setConstant(1.0);
+      qh_inv.segment<3>(6 * f).setConstant(0.1);
+      qh_inv.segment<3>(6 * f + 3).setConstant(1.0);
     }
-    const Eigen::Matrix<double, 4, 12> Af = A.bottomRows<4>();
-    Eigen::Matrix<double, 18, 18> K = Eigen::Matrix<double, 18, 18>::Zero();
-    K.topLeftCorner<12, 12>() = kRho * Af.transpose() * Af;
-    K.topLeftCorner<12, 12>().diagonal() += qw;
-    K.block<12, 6>(0, 12) = A.topRows<6>().transpose();
-    K.block<6, 12>(12, 0) = A.topRows<6>();
-    Eigen::Matrix<double, 18, 1> rhs;
-    rhs.head<12>() = kRho * Af.transpose() * b.tail<4>();
-    rhs.tail<6>() = b.head<6>();
-    const Eigen::Matrix<double, 18, 1> z = K.partialPivLu().solve(rhs);
+    const Eigen::Matrix<double, 6, 12> B = A.topRows<6>() * qh_inv.asDiagonal();
+    const Eigen::Matrix<double, 12, 1> up =
+        B.transpose() * (B * B.transpose()).ldlt().solve(b.head<6>());
+    const Eigen::FullPivHouseholderQR<Eigen::Matrix<double, 12, 6>> qr(B.transpose());
+    const Eigen::Matrix<double, 12, 12> Qfull = qr.matrixQ();
+    const Eigen::Matrix<double, 12, 6> N = Qfull.rightCols<6>();  // null space of B
+    const Eigen::Matrix<double, 4, 12> Afs = A.bottomRows<4>() * qh_inv.asDiagonal();
+    const Eigen::Matrix<double, 4, 6> C = Afs * N;
+    const Eigen::Vector4d dvec = b.tail<4>() - Afs * up;
+    const Eigen::JacobiSVD<Eigen::Matrix<double, 4, 6>> svd(
+        C, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::Vector4d sig = svd.singularValues();
+    // Three directions are always reachable (sigma ~ 0.06-0.11 here); the fourth is not: the sum
+    // of both ankles' moments about the line joining the feet can only come from the springs
+    // (sigma ~ 0, up to small foot tilts). Solve the three exactly, report the fourth.
+    Eigen::Matrix<double, 6, 1> y = Eigen::Matrix<double, 6, 1>::Zero();
+    for (int i = 0; i < 3; ++i)
+      y += svd.matrixV().col(i) * (svd.matrixU().col(i).dot(dvec) / sig(i));
+    // Sign-stable scalar: orient the unreachable direction along (c, s, c, s), the moment axis
+    // of the line between the feet, so that finite differences never see a flipped sign.
+    const Eigen::Vector3d dp = st.sole[kLeft].translation() - st.sole[kRight].translation();
+    const double phi = std::atan2(dp.y(), dp.x());
+    const Eigen::Vector4d ref(std::cos(phi), std::sin(phi), std::cos(phi), std::sin(phi));
+    Eigen::Vector4d u4 = svd.matrixU().col(3);
+    if (u4.dot(ref) < 0.0) u4 = -u4;
+    st.ds_balance = -u4.dot(dvec);
+    const Eigen::Matrix<double, 12, 1> z = qh_inv.asDiagonal() * (up + N * y);
     st.wrench[kRight] = z.head<6>();
     st.wrench[kLeft] = z.segment<6>(6);
-    st.flex_residual = Af * z.head<12>() - b.tail<4>();
+    const Eigen::Matrix<double, 4, 12> Af = A.bottomRows<4>();
+    st.flex_residual = Af * z - b.tail<4>();  // = -u4 (u4 . d): diagnostic
   }
 
   // -------------------------------------------------------------- rows of one sample
@@ -445,8 +491,9 @@ struct OverstepProblem::Impl {
     out.ineq.resize(ineq_cnt[static_cast<std::size_t>(k)]);
     out.eq.resize(eq_cnt[static_cast<std::size_t>(k)]);
     int r = 0;
-    const double h = 0.5 * cop_box;
-    const double mu = cfg.friction / std::sqrt(2.0);
+    const double h = 0.5 * cop_box * cfg.limit_margin;
+    const double mu = cfg.friction / std::sqrt(2.0) * cfg.limit_margin;
+    const double tors = cfg.torsion * cfg.limit_margin;
     const bool ds = st.contact[kRight] && st.contact[kLeft];
     for (int f = 0; f < 2; ++f) {
       if (!st.contact[f]) continue;
@@ -462,8 +509,8 @@ struct OverstepProblem::Impl {
       out.ineq(r++) = (-fo.x() - mu * fo.z()) / mg;
       out.ineq(r++) = (fo.y() - mu * fo.z()) / mg;
       out.ineq(r++) = (-fo.y() - mu * fo.z()) / mg;
-      out.ineq(r++) = (mo.z() - cfg.torsion * fo.z()) / (mg * cfg.torsion);
-      out.ineq(r++) = (-mo.z() - cfg.torsion * fo.z()) / (mg * cfg.torsion);
+      out.ineq(r++) = (mo.z() - tors * fo.z()) / (mg * cfg.torsion);
+      out.ineq(r++) = (-mo.z() - tors * fo.z()) / (mg * cfg.torsion);
       // Unilateral with a minimal normal force; an unloading foot may reach zero at lift-off.
       double fmin = cfg.min_normal_force;
       if ((g.phase == 0 && f == kRight) || (g.phase == 2 && f == kLeft)) fmin *= (1.0 - g.s);
@@ -506,7 +553,7 @@ struct OverstepProblem::Impl {
       out.ineq(r++) = (cfg.self_clearance - smoothMin(dist, cfg.smooth_min_rho)) / kDistScale;
     }
     const Eigen::Matrix3d Rb = m.framePose(base_frame).linear();
-    const double roll = rollOf(Rb), pitch = pitchOf(Rb), eps = cfg.pelvis_tilt;
+    const double roll = rollOf(Rb), pitch = pitchOf(Rb), eps = cfg.pelvis_tilt * cfg.limit_margin;
     out.ineq(r++) = (roll - eps) / eps;
     out.ineq(r++) = (-roll - eps) / eps;
     out.ineq(r++) = (pitch - eps) / eps;
@@ -533,9 +580,8 @@ struct OverstepProblem::Impl {
     }
     int e = 0;
     if (ds) {
-      const int leg = phaseTable()[static_cast<std::size_t>(g.phase)].base_foot == Foot::Right
-                          ? kLeft
-                          : kRight;
+      const int leg =
+          phaseTable()[static_cast<std::size_t>(g.phase)].base_foot == Foot::Right ? kLeft : kRight;
       for (int j = 0; j < 6; ++j) {
         const int a = leg_act[static_cast<std::size_t>(6 * leg + j)];
         const auto& aj = d.actuated[static_cast<std::size_t>(a)];
@@ -544,7 +590,7 @@ struct OverstepProblem::Impl {
         out.ineq(r++) = (aj.safeLower() - qj) / kJointScale;
       }
       out.ineq(r++) = (st.reach - cfg.leg_reach) / kDistScale;
-      for (int k2 = 0; k2 < 4; ++k2) out.eq(e++) = st.flex_residual(k2) / kFlexTorqueScale;
+      out.eq(e++) = st.ds_balance / kFlexTorqueScale;
     } else {
       const int stance = st.contact[kRight] ? kRight : kLeft;
       const Eigen::MatrixXd J = m.frameJacobian(sole_frame[stance]);
@@ -586,6 +632,7 @@ struct OverstepProblem::Impl {
       const double hy = yawOf(Rh), hp = pitchOf(Rh) - cfg.head_pitch_offset, hr = rollOf(Rh);
       T[9] = (hy * hy + hp * hp + hr * hr) / 0.0025;
     }
+    T[11] = st.ik_seed_gap / 0.0025;
     out.tau = st.tau.segment(6, model_template.actuatedCount());
   }
 
@@ -607,12 +654,12 @@ struct OverstepProblem::Impl {
     for (int j = 0; j < 6; ++j) {
       const int row = 6 * leg + j;
       const double qs = w.legs_c.row(row).segment(b.first, 4).dot(b.value);
-      out(r++) = (qs - st.q(leg_coord[static_cast<std::size_t>(row)])) / 0.01;
+      out(r++) = (qs - st.q(leg_coord[static_cast<std::size_t>(row)])) / kJointScale;
     }
     for (int j = 0; j < 6; ++j) {
       const int row = 6 * leg + j;
       const double vs = w.legs_c.row(row).segment(b.first, 4).dot(b.d1);
-      out(r++) = (vs - st.v(leg_coord[static_cast<std::size_t>(row)])) / 0.1;
+      out(r++) = (vs - st.v(leg_coord[static_cast<std::size_t>(row)])) / 1.0;
     }
     if (e == 0 || e == 2) {
       const int lifting = e == 0 ? kRight : kLeft;
@@ -622,20 +669,22 @@ struct OverstepProblem::Impl {
   }
 
   // -------------------------------------------------------------- assembly
+  /// Trapezoid quadrature weight of grid point k within its phase.
   double sampleWeight(const Workspace& w, int k) const {
     const GridPoint& g = grid[static_cast<std::size_t>(k)];
-    if (k + 1 == static_cast<int>(grid.size())) return 0.0;
-    return w.timing->durations()(g.phase) /
-           cfg.samples_per_phase[static_cast<std::size_t>(g.phase)];
+    const double h =
+        w.timing->durations()(g.phase) / cfg.samples_per_phase[static_cast<std::size_t>(g.phase)];
+    return (g.s == 0.0 || g.s == 1.0) ? 0.5 * h : h;
   }
 
   double objective(const Workspace& w, const std::vector<const SampleOut*>& s,
-                   std::array<double, 11>* terms) const {
-    std::array<double, 11> acc{};
+                   std::array<double, kObjectiveTerms>* terms) const {
+    std::array<double, kObjectiveTerms> acc{};
     const auto& names = objectiveTermNames();
     for (std::size_t k = 0; k < s.size(); ++k) {
       const double wk = sampleWeight(w, static_cast<int>(k));
-      for (int i = 0; i < 11; ++i) acc[static_cast<std::size_t>(i)] += wk * s[k]->terms[static_cast<std::size_t>(i)];
+      for (int i = 0; i < kObjectiveTerms; ++i)
+        acc[static_cast<std::size_t>(i)] += wk * s[k]->terms[static_cast<std::size_t>(i)];
       if (k > 0) {
         const double dt = s[k]->t - s[k - 1]->t;
         if (dt > 1e-9) {
@@ -646,7 +695,7 @@ struct OverstepProblem::Impl {
     }
     acc[8] = w.timing->total();
     double f = 0.0;
-    for (int i = 0; i < 11; ++i) {
+    for (int i = 0; i < kObjectiveTerms; ++i) {
       acc[static_cast<std::size_t>(i)] *= cfg.weights.at(names[static_cast<std::size_t>(i)]);
       f += acc[static_cast<std::size_t>(i)];
     }

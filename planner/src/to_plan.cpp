@@ -1,4 +1,6 @@
 // Dense sampling of a solution into the plan file contract (core::Plan).
+#include <algorithm>
+
 #include "problem_impl.hpp"
 
 namespace overstep::planner {
@@ -22,20 +24,41 @@ core::Plan OverstepProblem::toPlan(const Eigen::VectorXd& x, double rate) {
   p.coordinates = m.model_template.coordinateNames();
   for (int i = 0; i < kPhaseCount; ++i) {
     const auto& ph = phaseTable()[static_cast<std::size_t>(i)];
-    p.phases.push_back({ph.name, timing.start(i), timing.durations()(i), ph.right_contact,
-                        ph.left_contact});
+    p.phases.push_back(
+        {ph.name, timing.start(i), timing.durations()(i), ph.right_contact, ph.left_contact});
   }
+  // Samples at k / rate, plus both sides of every phase boundary (1 us apart) so that nothing
+  // interpolates across a contact switch.
   const double T = timing.total();
-  const int n = static_cast<int>(std::floor(T * rate + 1e-9)) + 1 + 1;
+  std::vector<std::pair<double, int>> when;
+  for (int k = 0;; ++k) {
+    const double t = k / rate;
+    if (t > T - 1e-9) break;
+    when.emplace_back(t, timing.locate(t).phase);
+  }
+  for (int b = 1; b < kPhaseCount; ++b) {
+    const double tb = timing.start(b);
+    when.emplace_back(tb - 1e-6, b - 1);
+    when.emplace_back(tb, b);
+  }
+  when.emplace_back(T, kPhaseCount - 1);
+  std::sort(when.begin(), when.end());
+  std::vector<std::pair<double, int>> uniq;
+  for (const auto& w2 : when)
+    if (uniq.empty() || w2.first > uniq.back().first + 1e-9)
+      uniq.push_back(w2);
+    else if (w2.second != uniq.back().second)
+      uniq.back() = w2;  // the boundary sample wins
+  const int n = static_cast<int>(uniq.size());
   p.resize(n, m.model_template.dofs(), m.model_template.actuatedCount());
   robots::WholeBodyModel& model = *w.model;
   for (int k = 0; k < n; ++k) {
-    const double t = std::min(k / rate, T);
-    const GridPoint g = timing.locate(t);
-    m.buildState(w, g.phase, t);
+    const double t = uniq[static_cast<std::size_t>(k)].first;
+    const int phase = uniq[static_cast<std::size_t>(k)].second;
+    m.buildState(w, phase, t);
     const State& st = w.st;
-    p.t(k) = k + 1 == n ? T : t;
-    p.phase(k) = g.phase;
+    p.t(k) = t;
+    p.phase(k) = phase;
     p.q.col(k) = st.q;
     p.v.col(k) = st.v;
     p.a.col(k) = st.a;
@@ -51,26 +74,6 @@ core::Plan OverstepProblem::toPlan(const Eigen::VectorXd& x, double rate) {
       (f == kRight ? p.right_foot : p.left_foot).col(k) = pose;
       (f == kRight ? p.right_wrench : p.left_wrench).col(k) = st.wrench[f];
     }
-  }
-  // The last sample lands exactly on T; drop a duplicate if floor() already reached it.
-  if (n >= 2 && p.t(n - 1) <= p.t(n - 2) + 1e-12) {
-    const int keep = n - 1;
-    core::Plan trimmed = p;
-    trimmed.resize(keep, m.model_template.dofs(), m.model_template.actuatedCount());
-    trimmed.t = p.t.head(keep);
-    trimmed.phase = p.phase.head(keep);
-    trimmed.q = p.q.leftCols(keep);
-    trimmed.v = p.v.leftCols(keep);
-    trimmed.a = p.a.leftCols(keep);
-    trimmed.tau = p.tau.leftCols(keep);
-    trimmed.com = p.com.leftCols(keep);
-    trimmed.zmp_wholebody = p.zmp_wholebody.leftCols(keep);
-    trimmed.zmp_tablecart = p.zmp_tablecart.leftCols(keep);
-    trimmed.right_foot = p.right_foot.leftCols(keep);
-    trimmed.left_foot = p.left_foot.leftCols(keep);
-    trimmed.right_wrench = p.right_wrench.leftCols(keep);
-    trimmed.left_wrench = p.left_wrench.leftCols(keep);
-    return trimmed;
   }
   return p;
 }

@@ -31,18 +31,18 @@ struct Plan {
   ObstacleSpec obstacle;
   double toes_x = 0.0;             ///< x of the start toes (the obstacle's gap is measured from it)
   std::string config_json = "{}";  ///< the planner configuration used (JSON object text)
-  std::string summary_json = "{}"; ///< the planner's summary (JSON object text)
+  std::string summary_json = "{}";  ///< the planner's summary (JSON object text)
   std::vector<PlanPhase> phases;
   double rate = 200.0;  ///< Hz of the samples
   std::vector<std::string> coordinates;
 
-  Eigen::VectorXd t;       ///< N sample times, s
-  Eigen::VectorXi phase;   ///< N phase indices
-  Eigen::MatrixXd q;       ///< dofs x N positions
-  Eigen::MatrixXd v;       ///< dofs x N velocities
-  Eigen::MatrixXd a;       ///< dofs x N accelerations
-  Eigen::MatrixXd tau;     ///< actuated x N joint torques, N m
-  Eigen::MatrixXd com;     ///< 3 x N, m
+  Eigen::VectorXd t;              ///< N sample times, s
+  Eigen::VectorXi phase;          ///< N phase indices
+  Eigen::MatrixXd q;              ///< dofs x N positions
+  Eigen::MatrixXd v;              ///< dofs x N velocities
+  Eigen::MatrixXd a;              ///< dofs x N accelerations
+  Eigen::MatrixXd tau;            ///< actuated x N joint torques, N m
+  Eigen::MatrixXd com;            ///< 3 x N, m
   Eigen::MatrixXd zmp_wholebody;  ///< 2 x N, m
   Eigen::MatrixXd zmp_tablecart;  ///< 2 x N, m
   Eigen::MatrixXd right_foot;     ///< 7 x N sole-frame pose [x y z qw qx qy qz]

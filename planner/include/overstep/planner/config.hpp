@@ -13,19 +13,21 @@ namespace overstep::planner {
 
 struct SolverSettings {
   std::string algorithm = "LD_SLSQP";
-  int max_iterations = 400;
+  int max_iterations = 300;
   double constraint_tolerance = 1e-6;
   double ftol_rel = 1e-7;
   double time_limit = 900.0;  ///< s
   int threads = 2;
+  double trust_radius = 0.0;  ///< initial box trust region (units of variableScale()); 0: off
+  int round_iterations = 60;  ///< SLSQP iterations per trust-region round
 };
 
 struct PlannerConfig {
-  std::array<int, kPhaseCount> samples_per_phase{8, 14, 5, 14, 8};
-  std::array<int, kPhaseCount> spline_intervals{3, 6, 2, 6, 3};
+  std::array<int, kPhaseCount> samples_per_phase{6, 12, 4, 12, 6};
+  std::array<int, kPhaseCount> spline_intervals{3, 6, 3, 6, 3};
   std::array<double, kPhaseCount> duration_min{0.4, 0.7, 0.15, 0.7, 0.4};
-  std::array<double, kPhaseCount> duration_max{2.0, 3.0, 1.0, 3.0, 2.0};
-  std::array<double, kPhaseCount> duration_guess{0.8, 1.3, 0.4, 1.3, 0.8};
+  std::array<double, kPhaseCount> duration_max{1.2, 2.0, 1.0, 2.0, 1.2};
+  std::array<double, kPhaseCount> duration_guess{0.8, 1.5, 0.6, 1.5, 0.8};
 
   double start_half_width = 0.095;
   double step_length_min = 0.30, step_length_max = 0.65;
@@ -39,13 +41,24 @@ struct PlannerConfig {
 
   double swing_clearance = 0.02, obstacle_clearance = 0.01, self_clearance = 0.005;
   double pelvis_tilt = 0.005, leg_reach = 0.585, smooth_min_rho = 200.0;
+  /// Fraction of the CoP box, friction and torsion coefficients and pelvis range enforced at the
+  /// samples: the motion between samples keeps the rest as margin (`overstep check` verifies on a
+  /// 1 kHz grid).
+  double limit_margin = 0.8;
   double height_homotopy_step = 0.05;
 
-  std::map<std::string, double> weights{
-      {"elastic_acc", 0.01},   {"elastic_vel", 0.1},    {"elastic_pos", 1.0},
-      {"lin_mom_z", 0.1},      {"lin_mom_z_rate", 0.1}, {"ang_mom_z_rate", 0.1},
-      {"contact_torque_z", 0.1}, {"zmp_lipm", 1.0},     {"time", 0.5},
-      {"head", 0.1},           {"torque_rate", 0.01}};
+  std::map<std::string, double> weights{{"elastic_acc", 0.01},
+                                        {"elastic_vel", 0.1},
+                                        {"elastic_pos", 1.0},
+                                        {"lin_mom_z", 0.1},
+                                        {"lin_mom_z_rate", 0.1},
+                                        {"ang_mom_z_rate", 0.1},
+                                        {"contact_torque_z", 0.1},
+                                        {"zmp_lipm", 1.0},
+                                        {"time", 1.0},
+                                        {"head", 0.1},
+                                        {"torque_rate", 0.01},
+                                        {"ds_leg_tracking", 0.01}};
   double head_pitch_offset = 0.0;
 
   SolverSettings solver;
@@ -58,7 +71,11 @@ struct PlannerConfig {
 /// file, an unknown key or an invalid value (one line naming file and key).
 PlannerConfig loadPlannerConfig(const std::string& path);
 
+/// Number of objective terms: the seed's eqs. (20)-(27) split into 11 named terms, plus
+/// "ds_leg_tracking", a small regulariser that keeps the double-support leg's (unused) spline near
+/// its inverse-kinematics solution so that the IK is always seeded on the right branch.
+inline constexpr int kObjectiveTerms = 12;
 /// Names of the objective terms, in report order.
-const std::array<const char*, 11>& objectiveTermNames();
+const std::array<const char*, kObjectiveTerms>& objectiveTermNames();
 
 }  // namespace overstep::planner

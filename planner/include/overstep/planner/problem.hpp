@@ -66,9 +66,9 @@ struct VariableLayout {
 
 struct Evaluation {
   double objective = 0.0;
-  std::array<double, 11> terms{};  ///< weighted objective terms (objectiveTermNames order)
-  Eigen::VectorXd ineq;            ///< scaled, <= 0 when satisfied
-  Eigen::VectorXd eq;              ///< scaled, = 0 when satisfied
+  std::array<double, kObjectiveTerms> terms{};  ///< weighted terms (objectiveTermNames order)
+  Eigen::VectorXd ineq;                         ///< scaled, <= 0 when satisfied
+  Eigen::VectorXd eq;                           ///< scaled, = 0 when satisfied
   /// Largest violation per family (scaled units), index by Family.
   std::array<double, static_cast<int>(Family::kCount)> worst{};
 };
@@ -92,6 +92,9 @@ class OverstepProblem {
   double toesX() const;
 
   void bounds(Eigen::VectorXd& lower, Eigen::VectorXd& upper) const;
+  /// Typical magnitude of a useful change of each variable (s, m, rad): solvers work on x / scale
+  /// so that every column of the Jacobian has a comparable size.
+  Eigen::VectorXd variableScale() const;
   /// Homotopy parameters: the obstacle height in use and the CoP box side.
   void setDifficulty(double obstacle_height, double cop_box);
   double currentHeight() const;
@@ -108,6 +111,9 @@ class OverstepProblem {
   void derivatives(const Eigen::VectorXd& x, const Evaluation& at, Eigen::VectorXd& grad,
                    Eigen::MatrixXd& jac_ineq, Eigen::MatrixXd& jac_eq);
   int evaluationCount() const;
+
+  /// "family at t = 1.234 s (phase name)" for a constraint row, using the durations of x.
+  std::string describeRow(const Eigen::VectorXd& x, bool equality, int row) const;
 
   /// Dense samples of the motion at `rate` Hz (plus the planner's summary fields left empty).
   core::Plan toPlan(const Eigen::VectorXd& x, double rate);

@@ -1,0 +1,234 @@
+// `overstep plan` and `overstep check`.
+#include <CLI/CLI.hpp>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "overstep/cli/command.hpp"
+#include "overstep/core/error.hpp"
+#include "overstep/core/plan.hpp"
+#include "overstep/planner/check.hpp"
+#include "overstep/planner/solver.hpp"
+#include "overstep/robots/whole_body_model.hpp"
+
+namespace overstep {
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void onSigint(int) { g_stop.store(true); }
+
+/// Beyond this the swing sole cannot be lifted over the bar at all (hip below 0.65 m, leg 0.6 m
+/// plus foot): answer at once instead of searching.
+constexpr double kReachableHeight = 0.45;
+
+struct PlanOptions {
+  std::string robot, config, out = "plan.json", shape = "box";
+  double height = 0.20, width = 0.11, gap = 0.03, margin = 0.0, time_limit = 0.0, rate = 200.0;
+  int threads = 0;
+  bool json = false;
+};
+
+std::string failedPath(const std::string& out) {
+  std::filesystem::path p(out);
+  std::string stem = p.stem().string();
+  return (p.parent_path() / (stem + ".failed.json")).string();
+}
+
+int runPlan(const PlanOptions& o) {
+  core::ObstacleSpec ob;
+  ob.shape = core::parseObstacleShape(o.shape);
+  ob.height = o.height;
+  ob.width = o.width;
+  ob.gap = o.gap;
+  ob.margin = o.margin;
+  core::validate(ob);
+  planner::PlannerConfig cfg =
+      o.config.empty() ? planner::PlannerConfig{} : planner::loadPlannerConfig(o.config);
+  if (o.threads < 0) throw InputError("--threads: expected >= 1, got " + std::to_string(o.threads));
+  if (o.threads > 0) cfg.solver.threads = o.threads;
+  if (o.time_limit < 0.0) throw InputError("--time-limit: expected >= 0 s");
+  if (o.time_limit > 0.0) cfg.solver.time_limit = o.time_limit;
+  if (!(o.rate > 0.0) || o.rate > 2000.0) throw InputError("--rate: expected 0 < rate <= 2000 Hz");
+  const robots::WholeBodyModel model = robots::WholeBodyModel::fromFile(o.robot);
+  {
+    std::error_code ec;
+    const auto dir = std::filesystem::path(o.out).parent_path();
+    if (!dir.empty() && !std::filesystem::is_directory(dir, ec))
+      throw InputError("--out: directory " + dir.string() + " does not exist");
+  }
+  FILE* log = o.json ? stderr : stdout;
+  if (ob.envelopeHeight() > kReachableHeight) {
+    throw InfeasibleError("obstacle height " + std::to_string(ob.envelopeHeight()) +
+                          " m is beyond the swing foot's reach (about " +
+                          std::to_string(kReachableHeight) + " m for this robot): no plan exists");
+  }
+  planner::OverstepProblem problem(model, cfg, ob);
+  std::fprintf(log, "overstep plan: %d variables, %d inequalities, %d equalities, %s, %d threads\n",
+               problem.layout().total, problem.inequalityCount(), problem.equalityCount(),
+               cfg.solver.algorithm.c_str(), cfg.solver.threads);
+  std::fprintf(log, "%5s %5s %14s %12s %10s %9s\n", "stage", "iter", "objective", "max viol",
+               "step", "elapsed");
+  auto row = [log](const planner::IterationInfo& i) {
+    std::fprintf(log, "%5d %5d %14.6g %12.3g %10.3g %8.1fs\n", i.stage, i.iteration, i.objective,
+                 i.max_violation, i.step, i.elapsed);
+    std::fflush(log);
+  };
+  auto solver = planner::makeNloptSolver(cfg.solver, row, &g_stop);
+  g_stop.store(false);
+  auto previous = std::signal(SIGINT, onSigint);
+  const planner::PlanOutcome out = planner::planOverstep(
+      problem, *solver, cfg.solver.time_limit,
+      [log](const std::string& s) {
+        std::fprintf(log, "-- %s\n", s.c_str());
+        std::fflush(log);
+      },
+      row, &g_stop);
+  std::signal(SIGINT, previous);
+
+  const Eigen::VectorXd& x = out.final.x;
+  nlohmann::json summary;
+  summary["status"] = g_stop.load() ? "interrupted" : (out.valid ? "solved" : "infeasible");
+  summary["solver_status"] = out.final.status;
+  summary["valid"] = out.valid;
+  summary["duration"] = problem.durations(x).sum();
+  summary["phase_durations"] = std::vector<double>(x.data(), x.data() + planner::kPhaseCount);
+  summary["step_length"] = problem.stepLength(x);
+  summary["foot_spacing"] = problem.footSpacing(x);
+  summary["solve_time"] = out.solve_time;
+  summary["iterations"] = out.iterations;
+  summary["evaluations"] = problem.evaluationCount();
+  summary["objective"] = out.final.objective;
+  nlohmann::json terms;
+  for (std::size_t i = 0; i < planner::objectiveTermNames().size(); ++i)
+    terms[planner::objectiveTermNames()[i]] = out.final.evaluation.terms[i];
+  summary["objective_terms"] = terms;
+  nlohmann::json viol;
+  for (int f = 0; f < static_cast<int>(planner::Family::kCount); ++f)
+    viol[planner::familyName(static_cast<planner::Family>(f))] =
+        std::max(0.0, out.final.evaluation.worst[static_cast<std::size_t>(f)]);
+  summary["max_violation"] = viol;
+  summary["obstacle"] = {{"shape", o.shape},
+                         {"height", ob.height},
+                         {"width", ob.width},
+                         {"gap", ob.gap},
+                         {"margin", ob.margin}};
+
+  core::Plan plan = problem.toPlan(x, o.rate);
+  const std::string path = out.valid ? o.out : failedPath(o.out);
+  summary["file"] = path;
+  plan.summary_json = summary.dump();
+  core::savePlan(plan, path);
+
+  std::fprintf(
+      log,
+      "%s: duration %.3f s, step length %.3f m, foot spacing %.3f m, %d iterations, %.1f s -> %s\n",
+      out.valid ? "valid plan" : "no valid plan", summary["duration"].get<double>(),
+      summary["step_length"].get<double>(), summary["foot_spacing"].get<double>(), out.iterations,
+      out.solve_time, path.c_str());
+  if (o.json) std::cout << summary.dump(2) << "\n";
+  if (g_stop.load()) {
+    cli::printError("plan", "interrupted; best attempt written to " + path);
+    return kExitInterrupted;
+  }
+  if (!out.valid) {
+    std::string fams;
+    for (const auto& f : out.violated) fams += (fams.empty() ? "" : ", ") + f;
+    throw InfeasibleError("no valid plan found (still violated: " +
+                          (fams.empty() ? std::string("homotopy not completed") : fams) +
+                          "); best attempt written to " + path);
+  }
+  return kExitOk;
+}
+
+struct CheckOptions {
+  std::string plan, robot;
+  double rate = 1000.0;
+  bool json = false;
+};
+
+int runCheck(const CheckOptions& o) {
+  const core::Plan plan = core::loadPlan(o.plan);
+  const robots::WholeBodyModel model = robots::WholeBodyModel::fromFile(o.robot);
+  const planner::CheckReport r = planner::checkPlan(plan, model, o.rate);
+  if (o.json) {
+    nlohmann::json j;
+    j["valid"] = r.valid;
+    j["grid_points"] = r.grid_points;
+    j["rate"] = r.rate;
+    j["duration"] = plan.duration();
+    nlohmann::json fam;
+    for (const auto& f : r.families) {
+      fam[f.name] = {{"worst", f.worst}, {"tolerance", f.tolerance}, {"unit", f.unit},
+                     {"t", f.t_worst},   {"where", f.detail},        {"ok", f.ok()}};
+    }
+    j["families"] = fam;
+    std::cout << j.dump(2) << "\n";
+  } else {
+    std::printf("plan %s: %.3f s, %d samples; checked on %d points at %.0f Hz\n", o.plan.c_str(),
+                plan.duration(), plan.samples(), r.grid_points, r.rate);
+    std::printf("%-15s %12s %10s %-9s %8s  %s\n", "family", "worst", "tolerance", "unit", "t (s)",
+                "where");
+    for (const auto& f : r.families) {
+      std::printf("%-15s %12.4g %10.3g %-9s %8.3f  %s%s\n", f.name.c_str(), f.worst, f.tolerance,
+                  f.unit.c_str(), f.t_worst, f.detail.c_str(), f.ok() ? "" : "  <-- VIOLATED");
+    }
+    std::printf("%s\n", r.valid ? "VALID" : "INVALID");
+  }
+  return r.valid ? kExitOk : kExitInfeasible;
+}
+
+}  // namespace
+
+void registerPlanCommands(CLI::App& app, cli::Registry& registry) {
+  auto po = std::make_shared<PlanOptions>();
+  po->robot = cli::defaultRobotPath();
+  CLI::App* plan = app.add_subcommand("plan", "Plan the two-step motion over the obstacle (NLopt)");
+  plan->add_option("--robot", po->robot, "Robot YAML")->capture_default_str();
+  plan->add_option("--config", po->config,
+                   "Planner YAML (default: embedded defaults, see planner/planner.yaml)");
+  plan->add_option("--obstacle-height", po->height, "Envelope height incl. safety margin, m")
+      ->capture_default_str();
+  plan->add_option("--obstacle-width", po->width, "Envelope width along x, m")
+      ->capture_default_str();
+  plan->add_option("--obstacle-shape", po->shape, "box or cylinder")->capture_default_str();
+  plan->add_option("--obstacle-gap", po->gap, "Distance from the start toes to the bar, m")
+      ->capture_default_str();
+  plan->add_option("--margin", po->margin, "Extra clearance on every side, m")
+      ->capture_default_str();
+  plan->add_option("--out", po->out, "Plan file (written atomically)")->capture_default_str();
+  plan->add_option("--threads", po->threads, "Threads for gradients (default from config: 2)");
+  plan->add_option("--time-limit", po->time_limit,
+                   "Seconds for the whole solve (default from config)");
+  plan->add_option("--rate", po->rate, "Sample rate of the plan file, Hz")->capture_default_str();
+  plan->add_flag("--json", po->json,
+                 "Print the summary as one JSON object on stdout (progress on stderr)");
+  plan->footer(
+      "Examples:\n"
+      "  overstep plan                                   # 20 cm x 11 cm bar -> plan.json\n"
+      "  overstep plan --obstacle-height 0.05 --out small.json\n"
+      "  overstep plan --obstacle-shape cylinder --json > summary.json\n"
+      "Exit: 0 valid plan written; 2 bad input; 3 no valid plan (best attempt in\n"
+      "<out>.failed.json); 130 interrupted (Ctrl-C keeps the best attempt).");
+  registry.add(plan, [po] { return runPlan(*po); });
+
+  auto co = std::make_shared<CheckOptions>();
+  co->robot = cli::defaultRobotPath();
+  CLI::App* check = app.add_subcommand("check", "Re-verify a plan independently on a dense grid");
+  check->add_option("plan", co->plan, "Plan file")->required();
+  check->add_option("--robot", co->robot, "Robot YAML")->capture_default_str();
+  check->add_option("--rate", co->rate, "Grid rate, Hz")->capture_default_str();
+  check->add_flag("--json", co->json, "Print {valid, families} as JSON");
+  check->footer(
+      "Examples:\n"
+      "  overstep check plan.json\n"
+      "  overstep check plan.json --json | jq .valid\n"
+      "Exit: 0 valid; 3 invalid (the table names the families); 2 bad input.");
+  registry.add(check, [co] { return runCheck(*co); });
+}
+
+}  // namespace overstep

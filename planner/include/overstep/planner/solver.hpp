@@ -1,0 +1,83 @@
+#pragma once
+/// \file
+/// Solving the overstep NLP: a solver interface (NLopt behind it; another solver can be added
+/// without touching the problem), and the homotopy driver that plans a motion: obstacle height
+/// raised in steps with a large CoP box, then the box shrunk to its target (planner.md).
+
+#include <atomic>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "overstep/planner/problem.hpp"
+
+namespace overstep::planner {
+
+struct IterationInfo {
+  int stage = 0;      ///< homotopy stage index
+  int iteration = 0;  ///< iterate count within the stage
+  double objective = 0.0;
+  double max_violation = 0.0;  ///< largest scaled constraint violation
+  double step = 0.0;           ///< |x_k - x_{k-1}|
+  double elapsed = 0.0;        ///< s since the solve began
+};
+
+struct SolveResult {
+  Eigen::VectorXd x;
+  std::string status;  ///< solver's word for how it stopped
+  int iterations = 0;
+  double objective = 0.0;
+  double max_violation = 0.0;
+  bool interrupted = false;
+  Evaluation evaluation;  ///< at x
+};
+
+class NlpSolver {
+ public:
+  virtual ~NlpSolver() = default;
+  /// Solves from x0 within the variable bounds and, when trust_radius > 0, within
+  /// x0 +- trust_radius * variableScale() (a box trust region), for at most max_iterations.
+  virtual SolveResult solve(OverstepProblem& problem, const Eigen::VectorXd& x0, int stage,
+                            double deadline_s, double trust_radius, int max_iterations) = 0;
+};
+
+/// NLopt with vector constraints and an x-keyed cache (one trajectory evaluation serves the
+/// objective and all constraint blocks). `algorithm` is an NLopt name such as "LD_SLSQP";
+/// throws InputError for an unknown name or one that cannot take the problem's constraints.
+std::unique_ptr<NlpSolver> makeNloptSolver(const SolverSettings& settings,
+                                           std::function<void(const IterationInfo&)> on_iteration,
+                                           const std::atomic<bool>* stop);
+
+struct PlanOutcome {
+  bool valid = false;                 ///< every constraint family within the feasibility tolerance
+  SolveResult final;                  ///< the last stage's result (best attempt)
+  int iterations = 0;                 ///< over all stages
+  double solve_time = 0.0;            ///< s
+  std::vector<std::string> violated;  ///< families still violated when not valid
+};
+
+/// Scaled violation accepted as feasible by the planner's own check after NLopt returns: e.g.
+/// 50 um of CoP beyond its box, 0.05 N m of ankle imbalance, 0.5 mm of clearance, 1e-3 rad at a
+/// switch. `overstep check` re-verifies the plan with physical tolerances on a 1 kHz grid.
+inline constexpr double kFeasibilityTolerance = 1e-2;
+
+struct RestorationResult {
+  Eigen::VectorXd x;
+  int iterations = 0;
+  double max_violation = 0.0;
+  bool interrupted = false;
+};
+
+/// Drives x toward feasibility (least squares on the violations, bounds respected).
+RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::VectorXd& x0,
+                                     int max_iterations, const std::atomic<bool>* stop,
+                                     const std::function<void(const IterationInfo&)>& on_iter);
+
+/// Runs the homotopy from the kinematic guess (after a feasibility restoration) to the target
+/// obstacle and CoP box.
+PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double time_limit_s,
+                         const std::function<void(const std::string&)>& on_stage,
+                         const std::function<void(const IterationInfo&)>& on_restore,
+                         const std::atomic<bool>* stop);
+
+}  // namespace overstep::planner

@@ -1,0 +1,205 @@
+#include "overstep/planner/check.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "overstep/core/error.hpp"
+#include "overstep/core/wrench.hpp"
+#include "overstep/planner/collision.hpp"
+
+namespace overstep::planner {
+namespace {
+
+double jsonNumber(const nlohmann::json& j, const char* key, double fallback) {
+  return j.contains(key) && j[key].is_number() ? j[key].get<double>() : fallback;
+}
+
+struct Tracker {
+  CheckFamily f;
+  Tracker(std::string name, double tol, std::string unit) {
+    f.name = std::move(name);
+    f.tolerance = tol;
+    f.unit = std::move(unit);
+    f.worst = -std::numeric_limits<double>::infinity();
+  }
+  void add(double v, double t, const std::string& detail) {
+    if (v > f.worst) {
+      f.worst = v;
+      f.t_worst = t;
+      f.detail = detail;
+    }
+  }
+};
+
+}  // namespace
+
+const CheckFamily* CheckReport::family(const std::string& name) const {
+  for (const auto& f : families)
+    if (f.name == name) return &f;
+  return nullptr;
+}
+
+CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& model_in,
+                      double rate_hz) {
+  robots::WholeBodyModel model(model_in);
+  const auto& d = model.description();
+  if (plan.robot_hash != d.hashHex()) {
+    throw InputError("plan was made for robot '" + plan.robot_name + "' (hash " + plan.robot_hash +
+                     "), not for " + d.yaml_path + " (hash " + d.hashHex() + ")");
+  }
+  if (plan.q.rows() != model.dofs() || plan.tau.rows() != model.actuatedCount()) {
+    throw InputError("plan has " + std::to_string(plan.q.rows()) + " coordinates, robot has " +
+                     std::to_string(model.dofs()));
+  }
+  if (!(rate_hz > 0.0)) throw InputError("check rate: expected > 0 Hz");
+  nlohmann::json cfg = nlohmann::json::parse(plan.config_json, nullptr, false);
+  if (cfg.is_discarded()) cfg = nlohmann::json::object();
+  const double cop_half = 0.5 * jsonNumber(cfg, "cop_box", 0.01);
+  const double mu = jsonNumber(cfg, "friction", 0.7) / std::sqrt(2.0);
+  const double torsion = jsonNumber(cfg, "torsion", 0.02);
+  const double tilt = jsonNumber(cfg, "pelvis_tilt", 0.005);
+  const double mg = model.totalMass() * d.gravity;
+
+  Tracker cop("cop", 1e-3, "m"), fric("friction", 0.02, "ratio"), uni("unilateral", 1.0, "N"),
+      clear("clearance", 1e-3, "m"), obst("obstacle", 1e-3, "m"), self("self_collision", 1e-3, "m"),
+      lim("joint_limits", 0.5 * M_PI / 180.0, "rad"), vel("velocity", 0.02, "ratio"),
+      trq("torque", 0.02, "ratio"), pel("pelvis", 1e-3, "rad"), stance("stance", 1e-3, "m"),
+      dyn("dynamics", 1.0, "N or N m");
+
+  const int rf = model.frameIndex(d.foot("right")->sole_frame);
+  const int lf = model.frameIndex(d.foot("left")->sole_frame);
+  const int sole[2] = {rf, lf};
+  const core::FootDescription* foot[2] = {d.foot("right"), d.foot("left")};
+  const int base = model.frameIndex(d.base_link);
+  std::vector<int> cap_frame;
+  for (const auto& c : d.capsules) cap_frame.push_back(model.frameIndex(c.link));
+  auto capIndex = [&](const std::string& link) {
+    for (std::size_t i = 0; i < d.capsules.size(); ++i)
+      if (d.capsules[i].link == link) return static_cast<int>(i);
+    return -1;
+  };
+  std::vector<int> leg_caps;
+  for (const char* l :
+       {"RLEG_LINK2", "RLEG_LINK3", "RLEG_FOOT", "LLEG_LINK2", "LLEG_LINK3", "LLEG_FOOT"})
+    if (capIndex(l) >= 0) leg_caps.push_back(capIndex(l));
+  std::vector<std::pair<int, int>> pairs;
+  for (int a = 0; a < 3 && a < static_cast<int>(leg_caps.size()); ++a)
+    for (int b = 3; b < static_cast<int>(leg_caps.size()); ++b)
+      pairs.emplace_back(leg_caps[static_cast<std::size_t>(a)],
+                         leg_caps[static_cast<std::size_t>(b)]);
+  const ObstacleGeometry og = ObstacleGeometry::fromSpec(plan.obstacle, plan.toes_x);
+
+  // Stance reference poses: where each foot is when its contact begins.
+  Eigen::Isometry3d anchor[2];
+  bool anchored[2] = {false, false};
+
+  const double T = plan.duration();
+  const int n = static_cast<int>(std::floor(T * rate_hz)) + 1;
+  CheckReport report;
+  report.rate = rate_hz;
+  report.grid_points = n;
+  int k = 0;
+  for (int i = 0; i < n; ++i) {
+    const double t = std::min(i / rate_hz, T);
+    while (k + 1 < plan.samples() && plan.t(k + 1) <= t + 1e-12) ++k;
+    const double tau_dt = t - plan.t(k);
+    // Second-order expansion from the sample at or before t (exact at the samples).
+    const Eigen::VectorXd q = model.integrate(
+        plan.q.col(k), plan.v.col(k) * tau_dt + 0.5 * plan.a.col(k) * tau_dt * tau_dt, 1.0);
+    const Eigen::VectorXd v = plan.v.col(k) + plan.a.col(k) * tau_dt;
+    const Eigen::VectorXd a = plan.a.col(k);
+    const int ph = plan.phase(k);
+    const bool contact[2] = {plan.phases[static_cast<std::size_t>(ph)].right_contact,
+                             plan.phases[static_cast<std::size_t>(ph)].left_contact};
+    model.setState(q, v, a);
+    const Eigen::VectorXd tau = model.inverseDynamics();
+    const core::Vector6d W = model.contactWrenchFromBase(tau);
+    core::Vector6d w[2];
+    const double s = plan.samples() > k + 1 ? tau_dt / (plan.t(k + 1) - plan.t(k)) : 0.0;
+    for (int f = 0; f < 2; ++f) {
+      const Eigen::MatrixXd& pw = f == 0 ? plan.right_wrench : plan.left_wrench;
+      // No interpolation across a phase change: the wrench may jump at a contact switch.
+      const bool same = k + 1 < plan.samples() && plan.phase(k + 1) == plan.phase(k);
+      w[f] = same ? core::Vector6d((1 - s) * pw.col(k) + s * pw.col(k + 1))
+                  : core::Vector6d(pw.col(k));
+      if (!contact[f]) w[f].setZero();
+    }
+    Eigen::Isometry3d X[2] = {model.framePose(sole[0]), model.framePose(sole[1])};
+    // Dynamic consistency: base rows and the elastic joints.
+    core::Vector6d sum = core::Vector6d::Zero();
+    for (int f = 0; f < 2; ++f)
+      sum += core::shiftWrench(w[f], X[f].translation(), Eigen::Vector3d::Zero());
+    const core::Vector6d res = W - sum;
+    dyn.add(res.head<3>().cwiseAbs().maxCoeff(), t, "base moment");
+    dyn.add(res.tail<3>().cwiseAbs().maxCoeff(), t, "base force");
+    for (int f = 0; f < 2; ++f) {
+      const Eigen::MatrixXd J = model.frameJacobian(sole[f]);
+      for (int e = 0; e < 2; ++e) {
+        const int c = model.elasticCoordinate(2 * f + e);
+        const double r = tau(c) - J.col(c).dot(w[f]);
+        dyn.add(std::abs(r), t, d.elastic[static_cast<std::size_t>(2 * f + e)].name);
+      }
+    }
+    for (int f = 0; f < 2; ++f) {
+      const std::string side = f == 0 ? "right" : "left";
+      if (contact[f]) {
+        const Eigen::Vector3d mo = X[f].linear().transpose() * w[f].head<3>();
+        const Eigen::Vector3d fo = X[f].linear().transpose() * w[f].tail<3>();
+        uni.add(-fo.z(), t, side);
+        // CoP and friction ratios are meaningless as the load vanishes (lift-off): below 5 % of
+        // the weight they are checked in their linear form against that 5 %.
+        const double fref = std::max(fo.z(), 0.05 * mg);
+        cop.add((std::max(std::abs(mo.y()), std::abs(mo.x())) - cop_half * fo.z()) / fref, t, side);
+        fric.add((std::max(std::abs(fo.x()), std::abs(fo.y())) - mu * fo.z()) / (mu * fref), t,
+                 side);
+        fric.add((std::abs(mo.z()) - torsion * fo.z()) / (torsion * fref), t, side + " torsion");
+        if (!anchored[f]) {
+          anchor[f] = X[f];
+          anchored[f] = true;
+        }
+        stance.add((X[f].translation() - anchor[f].translation()).norm(), t, side + " position");
+        stance.add(0.1 * Eigen::AngleAxisd(anchor[f].linear().transpose() * X[f].linear()).angle(),
+                   t, side + " orientation (0.1 m lever)");
+      } else {
+        anchored[f] = false;
+        for (double cx : {foot[f]->sole.x_front, -foot[f]->sole.x_back})
+          for (double cy : {foot[f]->yMin(), foot[f]->yMax()})
+            clear.add(-(X[f] * Eigen::Vector3d(cx, cy, 0.0)).z(), t, side + " sole corner");
+      }
+    }
+    std::vector<Capsule> wc(d.capsules.size());
+    for (std::size_t c = 0; c < d.capsules.size(); ++c) {
+      const Eigen::Isometry3d Xc = model.framePose(cap_frame[c]);
+      wc[c] = {Xc * d.capsules[c].p0, Xc * d.capsules[c].p1, d.capsules[c].radius};
+    }
+    for (int c : leg_caps)
+      obst.add(-obstacleDistance(wc[static_cast<std::size_t>(c)], og), t,
+               d.capsules[static_cast<std::size_t>(c)].link);
+    for (const auto& [a2, b2] : pairs)
+      self.add(-capsuleDistance(wc[static_cast<std::size_t>(a2)], wc[static_cast<std::size_t>(b2)]),
+               t,
+               d.capsules[static_cast<std::size_t>(a2)].link + "/" +
+                   d.capsules[static_cast<std::size_t>(b2)].link);
+    for (int j = 0; j < model.actuatedCount(); ++j) {
+      const auto& aj = d.actuated[static_cast<std::size_t>(j)];
+      const int c = model.actuatedCoordinate(j);
+      lim.add(std::max(q(c) - aj.safeUpper(), aj.safeLower() - q(c)), t, aj.name);
+      vel.add(std::abs(v(c)) / aj.velocity - 1.0, t, aj.name);
+      trq.add(std::abs(tau(c)) / aj.torque - 1.0, t, aj.name);
+    }
+    const Eigen::Matrix3d R = model.framePose(base).linear();
+    pel.add(std::abs(std::atan2(R(2, 1), R(2, 2))) - tilt, t, "roll");
+    pel.add(std::abs(std::asin(std::clamp(-R(2, 0), -1.0, 1.0))) - tilt, t, "pitch");
+  }
+  for (Tracker* tr :
+       {&cop, &fric, &uni, &clear, &obst, &self, &lim, &vel, &trq, &pel, &stance, &dyn}) {
+    if (!std::isfinite(tr->f.worst)) tr->f.worst = 0.0;
+    report.families.push_back(tr->f);
+  }
+  report.valid = std::all_of(report.families.begin(), report.families.end(),
+                             [](const CheckFamily& f) { return f.ok(); });
+  return report;
+}
+
+}  // namespace overstep::planner

@@ -1,0 +1,441 @@
+#include "overstep/planner/solver.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <nlopt.hpp>
+
+#include "overstep/core/error.hpp"
+
+namespace overstep::planner {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+class NloptSolver final : public NlpSolver {
+ public:
+  NloptSolver(SolverSettings s, std::function<void(const IterationInfo&)> cb,
+              const std::atomic<bool>* stop)
+      : settings_(std::move(s)), on_iteration_(std::move(cb)), stop_(stop) {
+    algorithm_ = nlopt::LD_SLSQP;
+    bool found = false;
+    // NLopt names algorithms NLOPT_LD_SLSQP etc.; nlopt_algorithm_from_string takes "LD_SLSQP".
+    const nlopt_algorithm alg = nlopt_algorithm_from_string(settings_.algorithm.c_str());
+    if (static_cast<int>(alg) >= 0) {
+      algorithm_ = static_cast<nlopt::algorithm>(alg);
+      found = true;
+    }
+    if (!found) {
+      throw InputError("solver.algorithm: unknown NLopt algorithm '" + settings_.algorithm +
+                       "' (e.g. LD_SLSQP, AUGLAG)");
+    }
+  }
+
+  SolveResult solve(OverstepProblem& problem, const Eigen::VectorXd& x0, int stage,
+                    double deadline_s, double trust_radius, int max_iterations) override {
+    const int n = problem.layout().total;
+    nlopt::opt opt(algorithm_, static_cast<unsigned>(n));
+    if (algorithm_ == nlopt::AUGLAG || algorithm_ == nlopt::AUGLAG_EQ) {
+      nlopt::opt local(nlopt::LD_LBFGS, static_cast<unsigned>(n));
+      local.set_ftol_rel(settings_.ftol_rel);
+      opt.set_local_optimizer(local);
+    }
+    Eigen::VectorXd lo, hi;
+    problem.bounds(lo, hi);
+    const Eigen::VectorXd D = problem.variableScale();
+    if (trust_radius > 0.0) {
+      lo = lo.cwiseMax(x0 - trust_radius * D);
+      hi = hi.cwiseMin(x0 + trust_radius * D);
+    }
+    const Eigen::VectorXd lot = lo.cwiseQuotient(D), hit = hi.cwiseQuotient(D);
+    opt.set_lower_bounds(std::vector<double>(lot.data(), lot.data() + n));
+    opt.set_upper_bounds(std::vector<double>(hit.data(), hit.data() + n));
+    State s(problem, *this, stage);
+    s.D = D;
+    s.max_iterations = max_iterations > 0 ? max_iterations : settings_.max_iterations;
+    {
+      // The objective enters at O(1): SLSQP's line search and QP are sensitive to its scale.
+      Evaluation e0;
+      problem.evaluate(x0, e0);
+      s.fscale = 1.0 / std::max(1.0, std::abs(e0.objective));
+    }
+    opt.set_min_objective(&NloptSolver::objective, &s);
+    try {
+      opt.add_inequality_mconstraint(
+          &NloptSolver::inequalities, &s,
+          std::vector<double>(static_cast<std::size_t>(problem.inequalityCount()),
+                              settings_.constraint_tolerance));
+      opt.add_equality_mconstraint(
+          &NloptSolver::equalities, &s,
+          std::vector<double>(static_cast<std::size_t>(problem.equalityCount()),
+                              settings_.constraint_tolerance));
+    } catch (const std::invalid_argument&) {
+      throw InputError("solver.algorithm: " + settings_.algorithm +
+                       " does not take nonlinear equality and inequality constraints");
+    }
+    opt.set_ftol_rel(settings_.ftol_rel);
+    opt.set_xtol_rel(1e-8);
+    opt.set_maxeval(s.max_iterations * 4);
+    opt.set_maxtime(std::max(1.0, deadline_s));
+    std::vector<double> x(static_cast<std::size_t>(n));
+    for (int i = 0; i < n; ++i)
+      x[static_cast<std::size_t>(i)] = std::clamp(x0(i), lo(i), hi(i)) / D(i);
+    double f = 0.0;
+    SolveResult r;
+    try {
+      const nlopt::result res = opt.optimize(x, f);
+      r.status = resultName(res);
+    } catch (const nlopt::forced_stop&) {
+      r.status = s.stalled                          ? "stalled"
+                 : s.iterations >= s.max_iterations ? "max_iterations"
+                                                    : "interrupted";
+      r.interrupted = r.status == "interrupted";
+    } catch (const nlopt::roundoff_limited&) {
+      r.status = "roundoff_limited";
+    } catch (const std::runtime_error& e) {
+      r.status = std::string("failure: ") + e.what();
+    }
+    // The best point seen (least violation, then objective) rather than NLopt's last one.
+    r.x = s.best_x.size()
+              ? s.best_x
+              : Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(x.data(), n).cwiseProduct(D));
+    problem.evaluate(r.x, r.evaluation);
+    r.objective = r.evaluation.objective;
+    r.max_violation = maxViolation(r.evaluation);
+    r.iterations = s.iterations;
+    return r;
+  }
+
+  static double maxViolation(const Evaluation& e) {
+    double v = 0.0;
+    if (e.ineq.size()) v = std::max(v, e.ineq.maxCoeff());
+    if (e.eq.size()) v = std::max(v, e.eq.cwiseAbs().maxCoeff());
+    return v;
+  }
+
+ private:
+  struct State {
+    State(OverstepProblem& p, NloptSolver& solver, int st)
+        : problem(p), self(solver), stage(st), start(solver.created_) {}
+    OverstepProblem& problem;
+    NloptSolver& self;
+    int stage;
+    Clock::time_point start;
+    Eigen::VectorXd x;  // cache key
+    Evaluation eval;
+    bool have_derivs = false;
+    Eigen::VectorXd grad;
+    Eigen::MatrixXd jin, jeq;
+    int iterations = 0;
+    double fscale = 1.0;
+    Eigen::VectorXd D;  // variable scale: x = D .* x_solver
+    int max_iterations = 0;
+    double stall_reference = std::numeric_limits<double>::infinity();
+    int stall_count = 0;
+    bool stalled = false;
+    Eigen::VectorXd last_iterate;
+    Eigen::VectorXd best_x;
+    double best_violation = std::numeric_limits<double>::infinity();
+    double best_objective = std::numeric_limits<double>::infinity();
+  };
+
+  static void refresh(State& s, unsigned n, const double* xp, bool need_grad) {
+    const Eigen::VectorXd x = Eigen::Map<const Eigen::VectorXd>(xp, n).cwiseProduct(s.D);
+    if (s.x.size() != static_cast<Eigen::Index>(n) || s.x != x) {
+      s.x = x;
+      s.problem.evaluate(s.x, s.eval);
+      s.have_derivs = false;
+      const double v = maxViolation(s.eval);
+      // Keep the best point: feasible beats infeasible, then lower objective.
+      const bool feasible = v <= kFeasibilityTolerance;
+      const bool best_feasible = s.best_violation <= kFeasibilityTolerance;
+      if ((feasible && (!best_feasible || s.eval.objective < s.best_objective)) ||
+          (!feasible && !best_feasible && v < s.best_violation)) {
+        s.best_x = s.x;
+        s.best_violation = v;
+        s.best_objective = s.eval.objective;
+      }
+    }
+    if (need_grad && !s.have_derivs) {
+      s.problem.derivatives(s.x, s.eval, s.grad, s.jin, s.jeq);
+      s.have_derivs = true;
+      ++s.iterations;
+      IterationInfo info;
+      info.stage = s.stage;
+      info.iteration = s.iterations;
+      info.objective = s.eval.objective;
+      info.max_violation = maxViolation(s.eval);
+      info.step = s.last_iterate.size() ? (s.x - s.last_iterate).cwiseQuotient(s.D).norm() : 0.0;
+      info.elapsed = std::chrono::duration<double>(Clock::now() - s.start).count();
+      s.last_iterate = s.x;
+      if (s.self.on_iteration_) s.self.on_iteration_(info);
+      // Stall: SLSQP can cycle between two iterates for hundreds of iterations (measured); stop
+      // a stage once the best feasible point has not improved for 40 iterations.
+      if (s.best_violation <= kFeasibilityTolerance) {
+        if (s.best_objective < s.stall_reference - 1e-4 * std::abs(s.stall_reference)) {
+          s.stall_reference = s.best_objective;
+          s.stall_count = 0;
+        } else if (++s.stall_count >= 40) {
+          s.stalled = true;
+        }
+      }
+      if ((s.self.stop_ && s.self.stop_->load()) || s.iterations >= s.max_iterations || s.stalled)
+        throw nlopt::forced_stop();
+    }
+  }
+
+  static double objective(unsigned n, const double* x, double* grad, void* data) {
+    State& s = *static_cast<State*>(data);
+    refresh(s, n, x, grad != nullptr);
+    if (grad) Eigen::Map<Eigen::VectorXd>(grad, n) = s.grad.cwiseProduct(s.D) * s.fscale;
+    return s.eval.objective * s.fscale;
+  }
+  static void inequalities(unsigned m, double* result, unsigned n, const double* x, double* grad,
+                           void* data) {
+    State& s = *static_cast<State*>(data);
+    refresh(s, n, x, grad != nullptr);
+    Eigen::Map<Eigen::VectorXd>(result, m) = s.eval.ineq;
+    // NLopt wants grad[i * n + j] = d c_i / d x_j (row-major).
+    if (grad)
+      Eigen::Map<Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(grad, m, n) =
+          s.jin * s.D.asDiagonal();
+  }
+  static void equalities(unsigned m, double* result, unsigned n, const double* x, double* grad,
+                         void* data) {
+    State& s = *static_cast<State*>(data);
+    refresh(s, n, x, grad != nullptr);
+    Eigen::Map<Eigen::VectorXd>(result, m) = s.eval.eq;
+    if (grad)
+      Eigen::Map<Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(grad, m, n) =
+          s.jeq * s.D.asDiagonal();
+  }
+
+  static std::string resultName(nlopt::result r) {
+    switch (r) {
+      case nlopt::SUCCESS:
+        return "success";
+      case nlopt::STOPVAL_REACHED:
+        return "stopval_reached";
+      case nlopt::FTOL_REACHED:
+        return "ftol_reached";
+      case nlopt::XTOL_REACHED:
+        return "xtol_reached";
+      case nlopt::MAXEVAL_REACHED:
+        return "max_evaluations";
+      case nlopt::MAXTIME_REACHED:
+        return "time_limit";
+      default:
+        return "failure";
+    }
+  }
+
+  SolverSettings settings_;
+  Clock::time_point created_ = Clock::now();  // elapsed times count from the solver's creation
+  std::function<void(const IterationInfo&)> on_iteration_;
+  const std::atomic<bool>* stop_;
+  nlopt::algorithm algorithm_;
+};
+
+}  // namespace
+
+RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::VectorXd& x0,
+                                     int max_iterations, const std::atomic<bool>* stop,
+                                     const std::function<void(const IterationInfo&)>& on_iter) {
+  // Projected Levenberg-Marquardt on the violation residuals r = [max(0, g); h] (rows near
+  // activity keep their Jacobians so the step does not break them). NLopt offers no
+  // least-squares method; SLSQP started far from feasibility stalls (measured: docs/planner.md).
+  const auto start = Clock::now();
+  Eigen::VectorXd lo, hi;
+  problem.bounds(lo, hi);
+  RestorationResult out;
+  Eigen::VectorXd x = x0.cwiseMax(lo).cwiseMin(hi);
+  Evaluation e;
+  problem.evaluate(x, e);
+  auto residual = [&](const Evaluation& ev, Eigen::VectorXd* r, std::vector<int>* rows) {
+    std::vector<int> idx;
+    for (int i = 0; i < ev.ineq.size(); ++i)
+      if (ev.ineq(i) > -0.05) idx.push_back(i);
+    if (rows) *rows = idx;
+    Eigen::VectorXd res(static_cast<Eigen::Index>(idx.size()) + ev.eq.size());
+    for (std::size_t k = 0; k < idx.size(); ++k)
+      res(static_cast<Eigen::Index>(k)) = std::max(0.0, ev.ineq(idx[k]));
+    res.tail(ev.eq.size()) = ev.eq;
+    if (r) *r = res;
+    return 0.5 * (ev.ineq.cwiseMax(0.0).squaredNorm() + ev.eq.squaredNorm());
+  };
+  double cost = residual(e, nullptr, nullptr);
+  double lambda = 1e-3;
+  Eigen::VectorXd grad;
+  Eigen::MatrixXd jin, jeq;
+  for (int it = 0; it < max_iterations; ++it) {
+    const double viol = NloptSolver::maxViolation(e);
+    if (viol <= 0.1 * kFeasibilityTolerance) break;
+    if (stop && stop->load()) {
+      out.interrupted = true;
+      break;
+    }
+    problem.derivatives(x, e, grad, jin, jeq);
+    Eigen::VectorXd r;
+    std::vector<int> rows;
+    residual(e, &r, &rows);
+    Eigen::MatrixXd J(r.size(), x.size());
+    for (std::size_t k = 0; k < rows.size(); ++k)
+      J.row(static_cast<Eigen::Index>(k)) = jin.row(rows[k]);
+    J.bottomRows(jeq.rows()) = jeq;
+    Eigen::MatrixXd JtJ = J.transpose() * J;
+    Eigen::VectorXd Jtr = J.transpose() * r;
+    // Variables on a bound whose descent direction leaves the box are held (projected LM).
+    for (int i = 0; i < x.size(); ++i) {
+      const bool at_lo = x(i) <= lo(i) + 1e-12 && Jtr(i) > 0.0;
+      const bool at_hi = x(i) >= hi(i) - 1e-12 && Jtr(i) < 0.0;
+      if (at_lo || at_hi) {
+        JtJ.row(i).setZero();
+        JtJ.col(i).setZero();
+        JtJ(i, i) = 1.0;
+        Jtr(i) = 0.0;
+      }
+    }
+    bool accepted = false;
+    for (int tries = 0; tries < 8 && !accepted; ++tries) {
+      Eigen::MatrixXd A = JtJ;
+      A.diagonal() += lambda * (JtJ.diagonal().array() + 1e-6).matrix();
+      const Eigen::VectorXd dx = -A.ldlt().solve(Jtr);
+      const Eigen::VectorXd xn = (x + dx).cwiseMax(lo).cwiseMin(hi);
+      Evaluation en;
+      problem.evaluate(xn, en);
+      const double cn = residual(en, nullptr, nullptr);
+      if (std::isfinite(cn) && cn < cost) {
+        x = xn;
+        e = en;
+        cost = cn;
+        lambda = std::max(1e-9, lambda / 3.0);
+        accepted = true;
+      } else {
+        lambda *= 5.0;
+      }
+    }
+    ++out.iterations;
+    if (on_iter) {
+      IterationInfo info;
+      info.stage = 0;
+      info.iteration = out.iterations;
+      info.objective = e.objective;
+      info.max_violation = NloptSolver::maxViolation(e);
+      info.step = lambda;
+      info.elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+      on_iter(info);
+    }
+    if (!accepted) break;
+  }
+  out.x = x;
+  out.max_violation = NloptSolver::maxViolation(e);
+  return out;
+}
+
+std::unique_ptr<NlpSolver> makeNloptSolver(const SolverSettings& settings,
+                                           std::function<void(const IterationInfo&)> on_iteration,
+                                           const std::atomic<bool>* stop) {
+  return std::make_unique<NloptSolver>(settings, std::move(on_iteration), stop);
+}
+
+PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double time_limit_s,
+                         const std::function<void(const std::string&)>& on_stage,
+                         const std::function<void(const IterationInfo&)>& on_restore,
+                         const std::atomic<bool>* stop) {
+  const auto start = Clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+  const PlannerConfig& cfg = problem.config();
+  const double target_h = problem.obstacle().height;
+  std::vector<double> boxes = cfg.cop_homotopy;
+  boxes.push_back(cfg.cop_box);
+  // Stages: heights up to the target with the largest box, then the smaller boxes.
+  std::vector<std::pair<double, double>> stages;
+  const double step = cfg.height_homotopy_step;
+  for (double h = std::min(target_h, step); h < target_h - 1e-9; h += step)
+    stages.emplace_back(h, boxes.front());
+  stages.emplace_back(target_h, boxes.front());
+  for (std::size_t i = 1; i < boxes.size(); ++i) stages.emplace_back(target_h, boxes[i]);
+
+  PlanOutcome out;
+  problem.setDifficulty(stages.front().first, stages.front().second);
+  Eigen::VectorXd x = problem.initialGuess();
+  if (on_stage) on_stage("restoring feasibility of the kinematic guess (Levenberg-Marquardt)");
+  const RestorationResult rest = restoreFeasibility(problem, x, 60, stop, on_restore);
+  x = rest.x;
+  out.iterations += rest.iterations;
+  for (std::size_t i = 0; i < stages.size(); ++i) {
+    problem.setDifficulty(stages[i].first, stages[i].second);
+    if (on_stage) {
+      char buf[128];
+      std::snprintf(buf, sizeof buf, "stage %zu/%zu: obstacle %.3f m, CoP box %.3f m", i + 1,
+                    stages.size(), stages[i].first, stages[i].second);
+      on_stage(buf);
+    }
+    const double left = time_limit_s - elapsed();
+    if (left <= 0.0) {
+      out.final.status = "time_limit";
+      break;
+    }
+    // Box trust region around the iterate (in units of variableScale()): SLSQP's first QP steps
+    // from an identity Hessian have norm ~15 and land where the contact kinematics are strongly
+    // nonlinear (measured: trial violations of 1e2-1e4). Rounds of SLSQP inside a box that grows
+    // on success and shrinks on failure keep every step where the linearisation holds.
+    double radius = cfg.solver.trust_radius;  // 0: one SLSQP run without a box
+    int stage_iterations = 0;
+    double best = std::numeric_limits<double>::infinity();
+    bool have = false;
+    int no_gain = 0;
+    while (stage_iterations < cfg.solver.max_iterations) {
+      const double remaining = time_limit_s - elapsed();
+      if (remaining <= 0.0) break;
+      const int budget =
+          cfg.solver.trust_radius > 0.0
+              ? std::min(cfg.solver.round_iterations, cfg.solver.max_iterations - stage_iterations)
+              : cfg.solver.max_iterations - stage_iterations;
+      SolveResult r = solver.solve(problem, x, static_cast<int>(i + 1), remaining, radius, budget);
+      stage_iterations += std::max(1, r.iterations);
+      out.iterations += r.iterations;
+      const bool feasible = r.max_violation <= kFeasibilityTolerance;
+      // Merit: feasibility first, then the objective.
+      const double score = feasible ? r.objective : 1e6 * (1.0 + r.max_violation);
+      if (!have || score < best - 1e-4 * std::abs(best)) {
+        const bool big_gain = have && score < best - 0.05 * std::abs(best);
+        best = score;
+        x = r.x;
+        out.final = r;
+        have = true;
+        radius = big_gain ? std::min(4.0 * cfg.solver.trust_radius, radius * 1.5) : radius;
+        no_gain = 0;
+      } else {
+        radius *= 0.5;
+        if (++no_gain >= 3 || cfg.solver.trust_radius <= 0.0) break;
+      }
+      if (cfg.solver.trust_radius <= 0.0 && r.status != "max_iterations") break;
+      if (r.interrupted) {
+        out.final.interrupted = true;
+        break;
+      }
+    }
+    if (out.final.interrupted) break;
+    if (out.final.max_violation > kFeasibilityTolerance) {
+      // SLSQP ends near, not always inside, the feasible set: polish with restoration steps.
+      const RestorationResult polish = restoreFeasibility(problem, x, 30, stop, on_restore);
+      out.iterations += polish.iterations;
+      x = polish.x;
+      problem.evaluate(x, out.final.evaluation);
+      out.final.x = x;
+      out.final.objective = out.final.evaluation.objective;
+      out.final.max_violation = polish.max_violation;
+    }
+  }
+  out.solve_time = elapsed();
+  const bool at_target = std::abs(problem.currentHeight() - target_h) < 1e-12 &&
+                         std::abs(problem.currentCopBox() - cfg.cop_box) < 1e-12;
+  out.valid = at_target && out.final.max_violation <= kFeasibilityTolerance;
+  for (int f = 0; f < static_cast<int>(Family::kCount); ++f) {
+    if (out.final.evaluation.worst[static_cast<std::size_t>(f)] > kFeasibilityTolerance)
+      out.violated.push_back(familyName(static_cast<Family>(f)));
+  }
+  return out;
+}
+
+}  // namespace overstep::planner

@@ -1,0 +1,99 @@
+// `overstep plan` / `overstep check` as a user runs them: bad input, impossible requests, and a
+// small obstacle planned end to end and re-verified independently.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "test_util.hpp"
+
+namespace overstep {
+namespace {
+
+struct RunResult {
+  int code = -1;
+  std::string out, err;
+  double seconds = 0.0;
+};
+
+RunResult run(const std::string& args) {
+  test::TempDir dir;
+  const std::string errfile = dir.file("stderr");
+  const std::string cmd = std::string(OVERSTEP_BIN) + " " + args + " 2>" + errfile;
+  const auto t0 = std::chrono::steady_clock::now();
+  RunResult r;
+  FILE* p = popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf{};
+  std::size_t n;
+  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.err = test::slurp(errfile);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+std::string lastLine(const std::string& s) {
+  std::string t = s;
+  while (!t.empty() && t.back() == '\n') t.pop_back();
+  const auto pos = t.rfind('\n');
+  return pos == std::string::npos ? t : t.substr(pos + 1);
+}
+
+TEST(PlanCli, BadInputIsExitTwoWithOneLine) {
+  test::TempDir dir;
+  const std::string out = " --out " + dir.file("p.json");
+  for (const std::string args :
+       {"plan --obstacle-height -0.2", "plan --obstacle-height tall", "plan --obstacle-width 0",
+        "plan --obstacle-shape sphere", "plan --margin -1", "plan --robot /nonexistent.yaml",
+        "plan --threads -2"}) {
+    const RunResult r = run(args + out);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.err;
+    EXPECT_NE(lastLine(r.err).find("error"), std::string::npos) << args << ": " << r.err;
+  }
+  test::writeText(dir.path() / "bad.yaml", "cop_box: [1\n");
+  const RunResult r = run("plan --config " + dir.file("bad.yaml") + out);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("malformed YAML"), std::string::npos) << r.err;
+}
+
+TEST(PlanCli, ImpossibleObstacleIsExitThreeAtOnce) {
+  test::TempDir dir;
+  const RunResult r = run("plan --obstacle-height 0.8 --out " + dir.file("p.json"));
+  EXPECT_EQ(r.code, 3) << r.err;
+  EXPECT_NE(r.err.find("beyond the swing foot's reach"), std::string::npos) << r.err;
+  EXPECT_LT(r.seconds, 30.0);
+}
+
+TEST(CheckCli, BadPlanFilesAreExitTwo) {
+  test::TempDir dir;
+  EXPECT_EQ(run("check " + dir.file("missing.json")).code, 2);
+  test::writeText(dir.path() / "garbage.json", "{\"format\": \"something else\"}");
+  const RunResult r = run("check " + dir.file("garbage.json"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("format"), std::string::npos) << r.err;
+}
+
+// The small-obstacle end-to-end scenario: plan a 5 cm bar, then let the independent checker
+// verify the written plan on a 1 kHz grid.
+TEST(PlanCli, SmallObstaclePlansAndPassesCheck) {
+  test::TempDir dir;
+  const std::string plan = dir.file("small.json");
+  const RunResult r = run("plan --obstacle-height 0.05 --json --out " + plan);
+  ASSERT_EQ(r.code, 0) << lastLine(r.err);
+  const auto summary = nlohmann::json::parse(r.out);
+  EXPECT_TRUE(summary["valid"].get<bool>());
+  EXPECT_GT(summary["duration"].get<double>(), 2.0);
+  EXPECT_GT(summary["step_length"].get<double>(), 0.3);
+  EXPECT_EQ(summary["phase_durations"].size(), 5u);
+  const RunResult c = run("check --json " + plan);
+  const auto report = nlohmann::json::parse(c.out);
+  EXPECT_EQ(c.code, 0) << c.out;
+  EXPECT_TRUE(report["valid"].get<bool>()) << report.dump(1);
+}
+
+}  // namespace
+}  // namespace overstep

@@ -1,0 +1,136 @@
+// The overstep NLP: derivatives against central finite differences, row layout, the kinematic
+// guess, consistency of the sampled motion, configuration loading.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "overstep/core/error.hpp"
+#include "overstep/planner/check.hpp"
+#include "overstep/planner/problem.hpp"
+#include "test_util.hpp"
+
+namespace overstep::planner {
+namespace {
+
+class Problem : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    model_ = new robots::WholeBodyModel(robots::WholeBodyModel::fromFile(test::hrp2Yaml()));
+    core::ObstacleSpec ob;
+    ob.height = 0.05;
+    problem_ = new OverstepProblem(*model_, PlannerConfig{}, ob);
+    x_ = new Eigen::VectorXd(problem_->initialGuess());
+  }
+  static void TearDownTestSuite() {
+    delete x_;
+    delete problem_;
+    delete model_;
+  }
+  static robots::WholeBodyModel* model_;
+  static OverstepProblem* problem_;
+  static Eigen::VectorXd* x_;
+};
+robots::WholeBodyModel* Problem::model_ = nullptr;
+OverstepProblem* Problem::problem_ = nullptr;
+Eigen::VectorXd* Problem::x_ = nullptr;
+
+TEST_F(Problem, LayoutAndRowFamiliesAreConsistent) {
+  const auto& lay = problem_->layout();
+  EXPECT_EQ(lay.total, 5 + 6 + 16 * lay.free_cp);
+  EXPECT_EQ(static_cast<int>(problem_->inequalityFamilies().size()), problem_->inequalityCount());
+  EXPECT_EQ(static_cast<int>(problem_->equalityFamilies().size()), problem_->equalityCount());
+  EXPECT_LT(problem_->equalityCount(), lay.total);  // SLSQP needs m_eq <= n
+  Evaluation e;
+  problem_->evaluate(*x_, e);
+  EXPECT_EQ(e.ineq.size(), problem_->inequalityCount());
+  EXPECT_EQ(e.eq.size(), problem_->equalityCount());
+  EXPECT_TRUE(e.ineq.allFinite());
+  EXPECT_TRUE(e.eq.allFinite());
+  EXPECT_TRUE(std::isfinite(e.objective));
+}
+
+TEST_F(Problem, InitialGuessIsInsideTheBounds) {
+  Eigen::VectorXd lo, hi;
+  problem_->bounds(lo, hi);
+  EXPECT_TRUE(((x_->array() >= lo.array()) && (x_->array() <= hi.array())).all());
+  EXPECT_GT(problem_->stepLength(*x_), 0.3);
+  EXPECT_GT(problem_->footSpacing(*x_), 0.1);
+}
+
+TEST_F(Problem, DerivativesMatchCentralDifferences) {
+  Evaluation e0;
+  problem_->evaluate(*x_, e0);
+  Eigen::VectorXd g;
+  Eigen::MatrixXd ji, je;
+  problem_->derivatives(*x_, e0, g, ji, je);
+  const auto& lay = problem_->layout();
+  // Durations, foot placements, a leg control point in each phase region, flex control points.
+  std::vector<int> cols = {0, 1, 2, 3, 4, lay.feet, lay.feet + 3, lay.feet + 5};
+  for (int f : {0, 3, lay.free_cp / 2, lay.free_cp - 1}) {
+    cols.push_back(lay.legs + 2 * lay.free_cp + f);  // right hip pitch
+    cols.push_back(lay.legs + 9 * lay.free_cp + f);  // left knee
+    cols.push_back(lay.flex + 1 * lay.free_cp + f);  // right ankle pitch bushing
+  }
+  for (int j : cols) {
+    const double h = 1e-5;
+    Eigen::VectorXd xp = *x_, xm = *x_;
+    xp(j) += h;
+    xm(j) -= h;
+    Evaluation ep, em;
+    problem_->evaluate(xp, ep);
+    problem_->evaluate(xm, em);
+    const double fd = (ep.objective - em.objective) / (2 * h);
+    EXPECT_NEAR(g(j), fd, 5e-3 * (1.0 + std::abs(fd)))
+        << "objective, column " << j;  // forward differences
+    const Eigen::VectorXd di = (ep.ineq - em.ineq) / (2 * h);
+    const Eigen::VectorXd de = (ep.eq - em.eq) / (2 * h);
+    const double scale_i = 1.0 + di.cwiseAbs().maxCoeff();
+    const double scale_e = 1.0 + de.cwiseAbs().maxCoeff();
+    EXPECT_LT((ji.col(j) - di).cwiseAbs().maxCoeff(), 1e-3 * scale_i)
+        << "inequalities, column " << j;
+    EXPECT_LT((je.col(j) - de).cwiseAbs().maxCoeff(), 1e-3 * scale_e) << "equalities, column " << j;
+  }
+}
+
+TEST_F(Problem, SampledMotionKeepsStanceFeetAndCarriesTheWeight) {
+  const core::Plan p = problem_->toPlan(*x_, 100.0);
+  EXPECT_NEAR(p.duration(), problem_->durations(*x_).sum(), 1e-9);
+  EXPECT_EQ(p.phases.size(), 5u);
+  // The left foot never moves before its swing; the right never after its landing.
+  for (int k = 0; k < p.samples(); ++k) {
+    if (p.phase(k) <= 2) {
+      EXPECT_LT((p.left_foot.col(k).head<3>() - p.left_foot.col(0).head<3>()).norm(), 1e-9);
+    }
+    if (p.phase(k) >= 2) {
+      EXPECT_LT((p.right_foot.col(k).head<2>() - Eigen::Vector2d((*x_)(7), (*x_)(8))).norm(), 1e-6);
+    }
+  }
+  // The foot wrenches sum to the contact wrench the motion needs (base rows), on a 1 kHz grid.
+  const CheckReport r = checkPlan(p, *model_);
+  EXPECT_FALSE(r.family("stance")->worst > 1e-3);
+}
+
+TEST(PlannerConfig, LoadsTheShippedFileAndRejectsBadOnes) {
+  const PlannerConfig c = loadPlannerConfig(test::dataDir() + "/planner/planner.yaml");
+  const PlannerConfig d;
+  EXPECT_EQ(c.samples_per_phase, d.samples_per_phase);
+  EXPECT_EQ(c.spline_intervals, d.spline_intervals);
+  EXPECT_EQ(c.duration_max, d.duration_max);
+  EXPECT_DOUBLE_EQ(c.cop_box, d.cop_box);
+  EXPECT_EQ(c.weights, d.weights);
+  EXPECT_EQ(c.solver.algorithm, "LD_SLSQP");
+  test::TempDir dir;
+  test::writeText(dir.path() / "a.yaml", "cop_box: -0.01\n");
+  EXPECT_THROW(loadPlannerConfig(dir.file("a.yaml")), InputError);
+  test::writeText(dir.path() / "b.yaml", "copbox: 0.01\n");
+  EXPECT_THROW(loadPlannerConfig(dir.file("b.yaml")), InputError);
+  test::writeText(dir.path() / "c.yaml", "weights: {speed: 1}\n");
+  EXPECT_THROW(loadPlannerConfig(dir.file("c.yaml")), InputError);
+  test::writeText(dir.path() / "d.yaml", "samples_per_phase: [1, 2]\n");
+  EXPECT_THROW(loadPlannerConfig(dir.file("d.yaml")), InputError);
+  test::writeText(dir.path() / "e.yaml", "friction: [oops\n");
+  EXPECT_THROW(loadPlannerConfig(dir.file("e.yaml")), InputError);
+}
+
+}  // namespace
+}  // namespace overstep::planner
