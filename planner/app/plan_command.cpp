@@ -119,7 +119,18 @@ int runPlan(const PlanOptions& o) {
                          {"margin", ob.margin}};
 
   core::Plan plan = problem.toPlan(x, o.rate);
-  const std::string path = out.valid ? o.out : failedPath(o.out);
+  // The planner's word is not enough: the written plan must also pass the independent check.
+  const planner::CheckReport report = planner::checkPlan(plan, model);
+  std::vector<std::string> violated = out.violated;
+  for (const auto& f : report.families)
+    if (!f.ok()) violated.push_back("check:" + f.name);
+  const bool valid = out.valid && report.valid;
+  summary["valid"] = valid;
+  summary["status"] = g_stop.load() ? "interrupted" : (valid ? "solved" : "infeasible");
+  nlohmann::json checked;
+  for (const auto& f : report.families) checked[f.name] = f.worst;
+  summary["check"] = {{"valid", report.valid}, {"worst", checked}};
+  const std::string path = valid ? o.out : failedPath(o.out);
   summary["file"] = path;
   plan.summary_json = summary.dump();
   core::savePlan(plan, path);
@@ -135,9 +146,9 @@ int runPlan(const PlanOptions& o) {
     cli::printError("plan", "interrupted; best attempt written to " + path);
     return kExitInterrupted;
   }
-  if (!out.valid) {
+  if (!valid) {
     std::string fams;
-    for (const auto& f : out.violated) fams += (fams.empty() ? "" : ", ") + f;
+    for (const auto& f : violated) fams += (fams.empty() ? "" : ", ") + f;
     throw InfeasibleError("no valid plan found (still violated: " +
                           (fams.empty() ? std::string("homotopy not completed") : fams) +
                           "); best attempt written to " + path);

@@ -204,7 +204,8 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
         } else if (name == "threads") {
           c.solver.threads = static_cast<int>(r.positive(s.second, k));
         } else if (name == "trust_radius") {
-          c.solver.trust_radius = r.positive(s.second, k);
+          c.solver.trust_radius = r.number(s.second, k);
+          if (c.solver.trust_radius < 0.0) r.fail(k, "expected >= 0 (0: off)");
         } else if (name == "round_iterations") {
           c.solver.round_iterations = static_cast<int>(r.positive(s.second, k));
         } else {

@@ -375,6 +375,13 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
       out.final.status = "time_limit";
       break;
     }
+    if (i > 0) {
+      // A harder stage starts infeasible (e.g. violations ~2 when the CoP box halves); SLSQP's
+      // identity-Hessian steps from there wander (measured). Project back first.
+      const RestorationResult proj = restoreFeasibility(problem, x, 40, stop, on_restore);
+      out.iterations += proj.iterations;
+      x = proj.x;
+    }
     // Box trust region around the iterate (in units of variableScale()): SLSQP's first QP steps
     // from an identity Hessian have norm ~15 and land where the contact kinematics are strongly
     // nonlinear (measured: trial violations of 1e2-1e4). Rounds of SLSQP inside a box that grows
@@ -426,6 +433,13 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
       out.final.objective = out.final.evaluation.objective;
       out.final.max_violation = polish.max_violation;
     }
+  }
+  if (out.final.x.size() == 0) {  // the time limit ended the solve before any stage ran
+    out.final.x = x;
+    problem.evaluate(x, out.final.evaluation);
+    out.final.objective = out.final.evaluation.objective;
+    out.final.max_violation = NloptSolver::maxViolation(out.final.evaluation);
+    out.final.status = "time_limit";
   }
   out.solve_time = elapsed();
   const bool at_target = std::abs(problem.currentHeight() - target_h) < 1e-12 &&

@@ -23,7 +23,7 @@ struct SolverSettings {
 };
 
 struct PlannerConfig {
-  std::array<int, kPhaseCount> samples_per_phase{6, 12, 4, 12, 6};
+  std::array<int, kPhaseCount> samples_per_phase{8, 14, 5, 14, 8};
   std::array<int, kPhaseCount> spline_intervals{3, 6, 3, 6, 3};
   std::array<double, kPhaseCount> duration_min{0.4, 0.7, 0.15, 0.7, 0.4};
   std::array<double, kPhaseCount> duration_max{1.2, 2.0, 1.0, 2.0, 1.2};
@@ -55,7 +55,7 @@ struct PlannerConfig {
                                         {"ang_mom_z_rate", 0.1},
                                         {"contact_torque_z", 0.1},
                                         {"zmp_lipm", 1.0},
-                                        {"time", 1.0},
+                                        {"time", 0.3},
                                         {"head", 0.1},
                                         {"torque_rate", 0.01},
                                         {"ds_leg_tracking", 0.01}};
