@@ -32,8 +32,11 @@ void BM_SetStateAndInverseDynamics(benchmark::State& st) {
   WholeBodyModel& m = model();
   setRandomState(m);
   const Eigen::VectorXd q = m.positions(), v = m.velocities(), a = m.accelerations();
+  const Eigen::VectorXd q1 = q.array() + 1e-3;
+  bool flip = false;
   for (auto _ : st) {
-    m.setState(q, v, a);
+    m.setState(flip ? q1 : q, v, a);  // two configurations: nothing cached across iterations
+    flip = !flip;
     benchmark::DoNotOptimize(m.inverseDynamics());
   }
 }
@@ -42,9 +45,13 @@ BENCHMARK(BM_SetStateAndInverseDynamics);
 void BM_MassMatrix(benchmark::State& st) {
   WholeBodyModel& m = model();
   setRandomState(m);
-  const Eigen::VectorXd q = m.positions();
+  // Alternate two configurations so that DART cannot serve a cached matrix.
+  const Eigen::VectorXd q0 = m.positions();
+  const Eigen::VectorXd q1 = q0.array() + 1e-3;
+  bool flip = false;
   for (auto _ : st) {
-    m.setPositions(q);
+    m.setPositions(flip ? q1 : q0);
+    flip = !flip;
     benchmark::DoNotOptimize(m.massMatrix());
   }
 }
@@ -54,8 +61,11 @@ void BM_ComAndJacobian(benchmark::State& st) {
   WholeBodyModel& m = model();
   setRandomState(m);
   const Eigen::VectorXd q = m.positions();
+  const Eigen::VectorXd q1 = q.array() + 1e-3;
+  bool flip = false;
   for (auto _ : st) {
-    m.setPositions(q);
+    m.setPositions(flip ? q1 : q);
+    flip = !flip;
     benchmark::DoNotOptimize(m.com());
     benchmark::DoNotOptimize(m.comJacobian());
   }
@@ -67,8 +77,11 @@ void BM_TwoFootJacobians(benchmark::State& st) {
   setRandomState(m);
   const Eigen::VectorXd q = m.positions();
   const int r = m.frameIndex("right_sole"), l = m.frameIndex("left_sole");
+  const Eigen::VectorXd q1 = q.array() + 1e-3;
+  bool flip = false;
   for (auto _ : st) {
-    m.setPositions(q);
+    m.setPositions(flip ? q1 : q);
+    flip = !flip;
     benchmark::DoNotOptimize(m.frameJacobian(r));
     benchmark::DoNotOptimize(m.frameJacobian(l));
   }
