@@ -1,36 +1,17 @@
 // The `overstep` front end as a user runs it: exit codes, one-line errors, JSON output.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <array>
-#include <cstdio>
 #include <nlohmann/json.hpp>
 
+#include "run_cli.hpp"
 #include "test_util.hpp"
 
 namespace overstep {
 namespace {
 
-struct RunResult {
-  int code = -1;
-  std::string out;
-  std::string err;
-};
+using test::RunResult;
 
-RunResult run(const std::string& args) {
-  test::TempDir dir;
-  const std::string errfile = dir.file("stderr");
-  const std::string cmd = std::string(OVERSTEP_BIN) + " " + args + " 2>" + errfile;
-  RunResult r;
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf{};
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.err = test::slurp(errfile);
-  return r;
-}
+RunResult run(const std::string& args) { return test::runOverstep(args); }
 
 void expectOneLineError(const RunResult& r, int code, const std::string& fragment) {
   EXPECT_EQ(r.code, code) << r.err;

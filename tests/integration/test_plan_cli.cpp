@@ -1,40 +1,18 @@
 // `overstep plan` / `overstep check` as a user runs them: bad input, impossible requests, and a
 // small obstacle planned end to end and re-verified independently.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <array>
-#include <chrono>
-#include <cstdio>
 #include <nlohmann/json.hpp>
 
+#include "run_cli.hpp"
 #include "test_util.hpp"
 
 namespace overstep {
 namespace {
 
-struct RunResult {
-  int code = -1;
-  std::string out, err;
-  double seconds = 0.0;
-};
+using test::RunResult;
 
-RunResult run(const std::string& args) {
-  test::TempDir dir;
-  const std::string errfile = dir.file("stderr");
-  const std::string cmd = std::string(OVERSTEP_BIN) + " " + args + " 2>" + errfile;
-  const auto t0 = std::chrono::steady_clock::now();
-  RunResult r;
-  FILE* p = popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf{};
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), p)) > 0) r.out.append(buf.data(), n);
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.err = test::slurp(errfile);
-  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return r;
-}
+RunResult run(const std::string& args) { return test::runOverstep(args); }
 
 std::string lastLine(const std::string& s) {
   std::string t = s;
