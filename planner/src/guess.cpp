@@ -1,7 +1,5 @@
 // The kinematic initial guess of the overstep problem (see OverstepProblem::initialGuess).
 #include <Eigen/QR>
-#include <cstdio>
-#include <cstdlib>
 
 #include "problem_impl.hpp"
 
@@ -157,19 +155,6 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
     solveLegs();  // the feet flat again over the final ankle deflection
     for (int j = 0; j < 12; ++j) Y(j, k) = q(m.leg_coord[static_cast<std::size_t>(j)]);
     for (int j = 0; j < 4; ++j) Y(12 + j, k) = q(m.flex_coord[static_cast<std::size_t>(j)]);
-    if (std::getenv("OVERSTEP_DEBUG_GUESS")) {
-      model.setPositions(q);
-      std::fprintf(stderr,
-                   "guess t=%.3f ph=%d com=(%.3f %.3f) target=(%.3f %.3f) R=(%.3f %.3f %.3f) "
-                   "L=(%.3f %.3f %.3f) q2=%.3f q3=%.3f q4=%.3f\n",
-                   t, g.phase, model.com().x(), model.com().y(), com_target.x(), com_target.y(),
-                   model.framePose(m.sole_frame[0]).translation().x(),
-                   model.framePose(m.sole_frame[0]).translation().y(),
-                   model.framePose(m.sole_frame[0]).translation().z(),
-                   model.framePose(m.sole_frame[1]).translation().x(),
-                   model.framePose(m.sole_frame[1]).translation().y(),
-                   model.framePose(m.sole_frame[1]).translation().z(), Y(2, k), Y(3, k), Y(4, k));
-    }
     const PhaseSpline::Basis b = spline.evaluate(t);
     B.block(k, b.first, 1, 4) = b.value.transpose();
   }

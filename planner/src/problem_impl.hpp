@@ -83,8 +83,7 @@ struct State {
   Eigen::Isometry3d sole[2];
   core::Vector6d W_O;  // total contact wrench about the world origin
   double ik_error = 0.0;
-  double reach = 0.0;                                       // hip-ankle distance of the IK leg
-  Eigen::Vector4d flex_residual = Eigen::Vector4d::Zero();  // DS elastic-ankle balance, N m
+  double reach = 0.0;        // hip-ankle distance of the IK leg
   double ds_balance = 0.0;   // DS: unreachable ankle-moment balance about the feet's line, N m
   double ik_seed_gap = 0.0;  // DS: |IK leg - its spline|^2, rad^2
 };
@@ -225,14 +224,11 @@ struct OverstepProblem::Impl {
     lay.total = lay.flex + VariableLayout::kFlex * lay.free_cp;
 
     // Grid and row layout.
-    Eigen::VectorXd d0(kPhaseCount);
-    for (int i = 0; i < kPhaseCount; ++i) d0(i) = cfg.duration_guess[static_cast<std::size_t>(i)];
     // Single-support phases are sampled on their closed interval (s = 0 .. 1): the stance ankle
     // obeys its dynamics right up to touchdown (without the s = 1 sample its residual reached
     // 10 N m in the last 85 ms; measured with overstep check). Double-support phases end at a
     // lift-off, where every contact row of the unloading foot degenerates (F = 0): they stop one
     // sample short (the lift-off event rows hold there), except the final phase.
-    (void)d0;
     for (int i = 0; i < kPhaseCount; ++i) {
       const int nph = cfg.samples_per_phase[static_cast<std::size_t>(i)];
       const auto& ph = phaseTable()[static_cast<std::size_t>(i)];
@@ -476,8 +472,6 @@ struct OverstepProblem::Impl {
     const Eigen::Matrix<double, 12, 1> z = qh_inv.asDiagonal() * (up + N * y);
     st.wrench[kRight] = z.head<6>();
     st.wrench[kLeft] = z.segment<6>(6);
-    const Eigen::Matrix<double, 4, 12> Af = A.bottomRows<4>();
-    st.flex_residual = Af * z - b.tail<4>();  // = -u4 (u4 . d): diagnostic
   }
 
   // -------------------------------------------------------------- rows of one sample
