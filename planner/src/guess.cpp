@@ -88,25 +88,7 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
         // Damped Newton inside the safe limits, from the previous solution and, if that stalls,
         // again from half-sitting; the better result is kept.
         auto solve = [&](Eigen::VectorXd& qs) {
-          double err = 0.0;
-          for (int it = 0; it < 60; ++it) {
-            model.setPositions(qs);
-            const core::Vector6d e = poseError(target, model.framePose(m.sole_frame[f]));
-            err = e.norm();
-            if (err < 1e-10) break;
-            const Eigen::MatrixXd Jf = model.frameJacobian(m.sole_frame[f]);
-            Eigen::Matrix<double, 6, 6> J;
-            for (int j = 0; j < 6; ++j) J.col(j) = Jf.col(cols[j]);
-            const Eigen::Matrix<double, 6, 6> A =
-                J.transpose() * J + 1e-6 * Eigen::Matrix<double, 6, 6>::Identity();
-            const Eigen::Matrix<double, 6, 1> dq = A.ldlt().solve(J.transpose() * e);
-            for (int j = 0; j < 6; ++j) {
-              const auto& aj = model.description().actuated[static_cast<std::size_t>(
-                  m.leg_act[static_cast<std::size_t>(6 * f + j)])];
-              qs(cols[j]) = std::clamp(qs(cols[j]) + dq(j), aj.safeLower(), aj.safeUpper());
-            }
-          }
-          return err;
+          return m.solveLegIk(model, f, target, qs, 1e-6, 60, 1e-10, true);
         };
         Eigen::VectorXd qa = q;
         const double ea = solve(qa);

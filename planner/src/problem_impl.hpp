@@ -360,6 +360,39 @@ struct OverstepProblem::Impl {
 
   /// Inverse kinematics of the non-anchor leg onto its placement (base fixed by the anchor), then
   /// its velocities and accelerations from the foot's zero velocity and acceleration.
+  /// Damped-Newton inverse kinematics of one leg (6 joints, base fixed) putting its sole frame
+  /// at `target`; each joint is clamped to [lower, upper] of `safe` ? the planner's safe range :
+  /// the mechanical range. Stops below `tol` or after `iterations`; returns the final pose error.
+  /// Damping keeps steps finite at the reach limit.
+  double solveLegIk(robots::WholeBodyModel& m, int leg, const Eigen::Isometry3d& target,
+                    Eigen::VectorXd& q, double damping, int iterations, double tol,
+                    bool safe) const {
+    const int f = sole_frame[leg];
+    const auto& joints = model_template.description().actuated;
+    double err = 0.0;
+    Eigen::Matrix<double, 6, 6> J;
+    for (int it = 0; it < iterations; ++it) {
+      m.setPositions(q);
+      const core::Vector6d e = poseError(target, m.framePose(f));
+      err = e.norm();
+      if (err < tol) break;
+      const Eigen::MatrixXd Jf = m.frameJacobian(f);
+      for (int j = 0; j < 6; ++j)
+        J.col(j) = Jf.col(leg_coord[static_cast<std::size_t>(6 * leg + j)]);
+      const Eigen::Matrix<double, 6, 6> A =
+          J.transpose() * J + damping * Eigen::Matrix<double, 6, 6>::Identity();
+      const Eigen::Matrix<double, 6, 1> dq = A.ldlt().solve(J.transpose() * e);
+      for (int j = 0; j < 6; ++j) {
+        const int c = leg_coord[static_cast<std::size_t>(6 * leg + j)];
+        const auto& aj =
+            joints[static_cast<std::size_t>(leg_act[static_cast<std::size_t>(6 * leg + j)])];
+        q(c) = std::clamp(q(c) + dq(j), safe ? aj.safeLower() : aj.lower,
+                          safe ? aj.safeUpper() : aj.upper);
+      }
+    }
+    return err;
+  }
+
   void solveOtherLeg(Workspace& w, int leg, const Eigen::Isometry3d& target) const {
     robots::WholeBodyModel& m = *w.model;
     State& st = w.st;
@@ -367,24 +400,7 @@ struct OverstepProblem::Impl {
     int cols[6];
     for (int j = 0; j < 6; ++j) cols[j] = leg_coord[static_cast<std::size_t>(6 * leg + j)];
     Eigen::Matrix<double, 6, 6> J;
-    for (int it = 0; it < 30; ++it) {
-      m.setPositions(st.q);
-      const core::Vector6d e = poseError(target, m.framePose(f));
-      st.ik_error = e.norm();
-      if (st.ik_error < 1e-11) break;
-      const Eigen::MatrixXd Jf = m.frameJacobian(f);
-      for (int j = 0; j < 6; ++j) J.col(j) = Jf.col(cols[j]);
-      // Damped least squares: stays finite at the reach limit.
-      const Eigen::Matrix<double, 6, 6> A =
-          J.transpose() * J + 1e-8 * Eigen::Matrix<double, 6, 6>::Identity();
-      const Eigen::Matrix<double, 6, 1> dq = A.ldlt().solve(J.transpose() * e);
-      for (int j = 0; j < 6; ++j) {
-        const auto& aj =
-            model_template.description()
-                .actuated[static_cast<std::size_t>(leg_act[static_cast<std::size_t>(6 * leg + j)])];
-        st.q(cols[j]) = std::clamp(st.q(cols[j]) + dq(j), aj.lower, aj.upper);
-      }
-    }
+    st.ik_error = solveLegIk(m, leg, target, st.q, 1e-8, 30, 1e-11, false);
     m.setPositions(st.q);
     const Eigen::MatrixXd Jf = m.frameJacobian(f);
     for (int j = 0; j < 6; ++j) J.col(j) = Jf.col(cols[j]);
