@@ -247,6 +247,36 @@ def yaml():
     y.append("")
     y.append("# Joint acceleration limit used by planners [est: ~30 rad/s^2 in controllers].")
     y.append("acceleration_limit: 30.0")
+    y.append("")
+    y.append("# Stabilizer (stabilizer/README.md): every key optional, each checked against a safety range.")
+    y.append("# Laws and typical gains: Kajita 2010 / hrpsys-base, Caron 2019 / mc_rtc [open]; tuned on")
+    y.append("# the flexible-ankle pendulum in tests/unit/test_stabilizer.cpp [est].")
+    y.append("stabilizer:")
+    for key, val, comment in (
+            ("feedback", "lipm", "lipm (Kajita 2010) or dcm (Caron 2019)"),
+            ("zmp_delay", "0.05", "s, first-order lag of the realised ZMP (Kajita: 0.04-0.055)"),
+            ("lipm_poles", "[2.5, 4.0, 12.0]", "1/s, closed-loop decay rates of the LIPM law"),
+            ("dcm_kp", "4.0", "1/s (HRP-2Kai in mc_rtc: 4)"),
+            ("dcm_ki", "15.0", "1/s^2 (HRP-2Kai in mc_rtc: 15)"),
+            ("dcm_integral_time", "10.0", "s, leak of the DCM integral"),
+            ("cop_margin", "0.005", "m, desired CoPs stay this far inside the sole"),
+            ("min_ds_force", "15.0", "N, least normal force per foot in double support"),
+            ("damping_roll", "60.0", "N m s/rad, foot damping D (sole x moment)"),
+            ("damping_pitch", "60.0", "N m s/rad, foot damping D (sole y moment)"),
+            ("damping_time_constant", "1.0", "s, return of the foot rotation to the reference"),
+            ("max_foot_rotation", "0.17", "rad (10 deg, Kajita 2010)"),
+            ("max_foot_rotation_rate", "0.5", "rad/s"),
+            ("force_difference_gain", "1.0e-4", "m/(N s)"),
+            ("max_foot_height", "0.02", "m"),
+            ("posture_gain", "0.5", "1/s, body posture from the IMU"),
+            ("posture_time_constant", "1.5", "s"),
+            ("max_body_attitude", "0.1", "rad"),
+            ("com_admittance", "0.0", "1/s^2, 0 = off"),
+            ("max_com_offset", "0.05", "m"),
+            ("ramp_time", "1.0", "s, ramp-in / ramp-out"),
+            ("max_com_error", "0.10", "m, larger -> fault and hold"),
+            ("max_torso_tilt", "0.5", "rad, larger -> fault and hold")):
+        y.append("  %-24s # %s" % ("%s: %s" % (key, val), comment))
     return "\n".join(y) + "\n"
 
 def main():

@@ -1,0 +1,535 @@
+// Stabilizer: pole placement, closed-loop behaviour on closed-form plants, the wrench distributor,
+// saturations, mode ramps, faults and parameter loading.
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "overstep/core/error.hpp"
+#include "overstep/stabilizer/stabilizer.hpp"
+#include "stabilizer_plants.hpp"
+#include "test_util.hpp"
+
+namespace st = overstep::stabilizer;
+using overstep::test::feetAt;
+using overstep::test::kComHeight;
+using overstep::test::kG;
+using overstep::test::kMass;
+
+namespace {
+
+constexpr double kDt = 0.005;  // 200 Hz, HRP-2's control period
+// A bushing softer than m g l (455 N m/rad here): the pendulum cannot stand on it alone, so only
+// the foot damping loop can hold it (HRP-2's pitch bushing, 502 N m/rad, is marginally stiffer).
+constexpr double kSoftBushing = 300.0;
+
+/// Runs a fresh stabilizer until it is On (ramp of 0.01 s) on a neutral, error-free input.
+void bringOn(st::Stabilizer& s, const st::Reference& ref) {
+  s.setReference(ref);
+  ASSERT_TRUE(s.enable());
+  st::Output out;
+  const auto feet = std::array<Eigen::Isometry3d, 2>{ref.foot[0].pose, ref.foot[1].pose};
+  for (int i = 0; i < 10 && s.status().mode != st::Mode::On; ++i)
+    s.step(overstep::test::measurementWithZmp(ref.com, Eigen::Vector3d::Zero(), ref.zmp, feet), kDt,
+           out);
+  ASSERT_EQ(s.status().mode, st::Mode::On);
+}
+
+/// Sorted real parts of eigenvalues of the continuous closed loop identified from simulation:
+/// Phi(T) from three unit initial conditions, then log(eig(Phi)) / T.
+std::array<double, 3> identifiedDecayRates(st::Params p, double T) {
+  const auto feet = feetAt(0.1);
+  const Eigen::Vector2d zmp0(0.0, 0.0);
+  Eigen::Matrix3d Phi;
+  for (int col = 0; col < 3; ++col) {
+    st::Stabilizer s(p);
+    const st::Reference ref = overstep::test::staticReference(zmp0, feet);
+    bringOn(s, ref);
+    overstep::test::LagLipm plant;
+    plant.tp = p.zmp_delay;
+    const double e0 = 0.002;
+    (col == 0 ? plant.c : col == 1 ? plant.cd : plant.p) = e0;
+    constexpr double dt = 0.001;  // 1 kHz: the zero-order hold shifts the poles by < 1 %
+    const int n = static_cast<int>(std::lround(T / dt));
+    st::Output out;
+    for (int i = 0; i < n; ++i) {
+      const auto meas = overstep::test::measurementWithZmp(
+          Eigen::Vector3d(plant.c, 0, kComHeight), Eigen::Vector3d(plant.cd, 0, 0),
+          Eigen::Vector2d(plant.p, 0), feet);
+      s.step(meas, dt, out);
+      EXPECT_FALSE(out.distribution.clamped);
+      plant.step(out.zmp_desired.x(), dt);
+    }
+    Phi.col(col) = Eigen::Vector3d(plant.c, plant.cd, plant.p) / e0;
+  }
+  const Eigen::Vector3cd mu = Phi.eigenvalues();
+  std::array<double, 3> rates{};
+  for (int i = 0; i < 3; ++i) rates[static_cast<std::size_t>(i)] = -std::log(std::abs(mu(i))) / T;
+  std::sort(rates.begin(), rates.end());
+  return rates;
+}
+
+}  // namespace
+
+TEST(StabilizerGains, PolePlacementGivesTheRequestedCharacteristicPolynomial) {
+  const double omega = std::sqrt(kG / kComHeight), tp = 0.04;
+  const std::array<double, 3> lambda{{2.0, 5.0, 18.0}};
+  const auto k = st::gainsFromPoles(lambda, omega, tp);
+  Eigen::Matrix3d A;
+  A << 0, 1, 0, omega * omega, 0, -omega * omega, k[0] / tp, k[1] / tp, (k[2] - 1.0) / tp;
+  Eigen::Vector3cd ev = A.eigenvalues();
+  std::array<double, 3> got{};
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(ev(i).imag(), 0.0, 1e-9);
+    got[static_cast<std::size_t>(i)] = -ev(i).real();
+  }
+  std::sort(got.begin(), got.end());
+  for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(got[i], lambda[i], 1e-9);
+  // The hrpsys-base defaults (0.9 x (1.414, 0.404, 0.18)) correspond to stable poles at Tp = 0.04.
+  EXPECT_GT(k[0], 0.0);
+  EXPECT_GT(k[1], 0.0);
+}
+
+TEST(StabilizerLipm, InitialErrorDecaysWithTheDesignedPoles) {
+  st::Params p = overstep::test::plantParams();
+  p.zmp_delay = 0.05;
+  p.lipm_poles = {{3.0, 6.0, 15.0}};
+  const auto rates = identifiedDecayRates(p, 0.2);
+  for (std::size_t i = 0; i < 3; ++i)
+    EXPECT_NEAR(rates[i], p.lipm_poles[i], 0.03 * p.lipm_poles[i]) << "pole " << i;
+}
+
+TEST(StabilizerLipm, ImpulsePushDecaysAndTheZmpSettlesOnAConstantReference) {
+  st::Params p = overstep::test::plantParams();
+  const auto feet = feetAt(0.1);
+  const Eigen::Vector2d zmp_ref(0.03, 0.0);  // constant, off-centre reference
+  st::Stabilizer s(p);
+  bringOn(s, overstep::test::staticReference(zmp_ref, feet));
+  overstep::test::LagLipm plant;
+  plant.tp = p.zmp_delay;
+  plant.c = 0.015;  // initial CoM error
+  plant.p = 0.0;
+  st::Output out;
+  double peak_after_push = 0.0;
+  const double slowest = *std::min_element(p.lipm_poles.begin(), p.lipm_poles.end());
+  for (int i = 0; i < 2000; ++i) {  // 10 s
+    const double t = i * kDt;
+    if (i == 600) plant.cd += 0.1;  // impulse push at 3 s: +0.1 m/s
+    const auto meas = overstep::test::measurementWithZmp(
+        Eigen::Vector3d(plant.c, 0, kComHeight), Eigen::Vector3d(plant.cd, 0, 0),
+        Eigen::Vector2d(plant.p, 0), feet);
+    s.step(meas, kDt, out);
+    plant.step(out.zmp_desired.x(), kDt);
+    if (t > 3.0) peak_after_push = std::max(peak_after_push, std::abs(plant.c - zmp_ref.x()));
+    if (i == 599) {
+      EXPECT_LT(std::abs(plant.c - zmp_ref.x()), 0.015 * std::exp(-slowest * 2.0))
+          << "initial error must have decayed at least like the slowest pole";
+    }
+  }
+  EXPECT_GT(peak_after_push, 0.005);  // the push did move the CoM
+  EXPECT_LT(peak_after_push, 0.05);
+  EXPECT_NEAR(plant.c, zmp_ref.x(), 1e-6);
+  EXPECT_NEAR(plant.p, zmp_ref.x(), 1e-6) << "steady-state ZMP error";
+  EXPECT_NEAR(out.zmp_error.x(), 0.0, 1e-6);
+}
+
+TEST(StabilizerDcm, DcmErrorDecaysAtKpWithIdealZmpTracking) {
+  st::Params p = overstep::test::plantParams();
+  p.feedback = st::Feedback::Dcm;
+  p.dcm_kp = 3.0;
+  p.dcm_ki = 0.0;
+  p.zmp_feedforward = 0.0;
+  const auto feet = feetAt(0.1);
+  st::Stabilizer s(p);
+  bringOn(s, overstep::test::staticReference(Eigen::Vector2d::Zero(), feet));
+  overstep::test::LagLipm plant;
+  plant.tp = 0.0;  // the ZMP is what was commanded
+  plant.c = 0.01;
+  plant.cd = 0.0;
+  const double omega = std::sqrt(kG / kComHeight);
+  st::Output out;
+  double xi0 = 0.0;
+  for (int i = 0; i <= 200; ++i) {
+    const auto meas = overstep::test::measurementWithZmp(
+        Eigen::Vector3d(plant.c, 0, kComHeight), Eigen::Vector3d(plant.cd, 0, 0),
+        Eigen::Vector2d(plant.p, 0), feet);
+    s.step(meas, kDt, out);
+    if (i == 0) xi0 = out.dcm_error.x();
+    if (i == 200) {
+      const double xi = plant.c + plant.cd / omega;
+      // one period of zero-order hold: exact discrete decay factor of the DCM error
+      EXPECT_NEAR(std::log(xi / xi0) / (200 * kDt), -p.dcm_kp, 0.05 * p.dcm_kp);
+    }
+    plant.step(out.zmp_desired.x(), kDt);
+  }
+}
+
+TEST(StabilizerDcm, LeakyIntegralRemovesMostOfAConstantZmpBias) {
+  // A ZMP realisation bias b (e.g. a sensor offset): the proportional law leaves an offset,
+  // the integral removes all but the leak's share.
+  auto finalOffset = [](double ki) {
+    st::Params p = overstep::test::plantParams();
+    p.feedback = st::Feedback::Dcm;
+    p.dcm_ki = ki;
+    p.dcm_integral_time = 50.0;
+    const auto feet = feetAt(0.1);
+    st::Stabilizer s(p);
+    bringOn(s, overstep::test::staticReference(Eigen::Vector2d::Zero(), feet));
+    overstep::test::LagLipm plant;
+    plant.tp = p.zmp_delay;
+    st::Output out;
+    for (int i = 0; i < 6000; ++i) {
+      const auto meas = overstep::test::measurementWithZmp(
+          Eigen::Vector3d(plant.c, 0, kComHeight), Eigen::Vector3d(plant.cd, 0, 0),
+          Eigen::Vector2d(plant.p, 0), feet);
+      s.step(meas, kDt, out);
+      plant.step(out.zmp_desired.x() + 0.01, kDt);
+    }
+    return std::abs(plant.c);
+  };
+  const double p_only = finalOffset(0.0), with_i = finalOffset(15.0);
+  EXPECT_GT(p_only, 0.002);
+  EXPECT_LT(with_i, 0.1 * p_only);
+}
+
+class FlexibleAnkle : public ::testing::TestWithParam<double> {};
+
+TEST_P(FlexibleAnkle, FootDampingStabilisesThePendulumThroughTheBushing) {
+  const double k = GetParam();
+  st::Params p = overstep::test::plantParams();
+  p.contact_force = 10.0;
+  const auto feet = feetAt(0.1);
+  const Eigen::Vector2d support = feet[0].translation().head<2>();
+  st::Stabilizer s(p);
+  bringOn(s, overstep::test::staticReference(support, feet, {{true, false}}));
+  overstep::test::FlexAnklePendulum plant;
+  plant.k = k;
+  plant.phi = 0.02 / plant.l;  // 2 cm CoM error
+  double theta = 0.0, theta_prev = 0.0;
+  st::Output out;
+  double max_theta = 0.0, err_at_4s = 0.0;
+  for (int i = 0; i < 2000; ++i) {
+    const double thetad = (theta - theta_prev) / kDt;
+    s.step(plant.measure(theta, thetad, feet), kDt, out);
+    theta_prev = theta;
+    theta = out.foot_rotation[0].y();
+    max_theta = std::max(max_theta, std::abs(theta));
+    plant.step(theta, (theta - theta_prev) / kDt, kDt);
+    ASSERT_LT(std::abs(plant.phi * plant.l), 0.1) << "fell at t = " << i * kDt;
+    if (i == 800) err_at_4s = std::abs(plant.phi * plant.l);
+  }
+  EXPECT_LT(err_at_4s, 0.002);
+  EXPECT_LT(std::abs(plant.phi * plant.l), 1e-4);
+  EXPECT_LT(std::abs(out.zmp_measured.x() - support.x()), 1e-4) << "steady-state ZMP error";
+  EXPECT_LE(max_theta, p.max_foot_rotation + 1e-12);
+  EXPECT_GT(max_theta, 1e-3) << "the foot damping must have acted";
+}
+
+// A bushing softer than m g l (the pendulum cannot stand on it alone) and HRP-2's pitch bushing.
+INSTANTIATE_TEST_SUITE_P(Bushings, FlexibleAnkle, ::testing::Values(kSoftBushing, 502.0));
+
+TEST(StabilizerFlexibleAnkle, WithoutFeedbackThePendulumFalls) {
+  // The same plant with the stabilizer off: the 2 cm lean is not recoverable by the bushing alone
+  // (k < m g l), which is what makes the previous test meaningful.
+  overstep::test::FlexAnklePendulum plant;
+  plant.k = kSoftBushing;
+  ASSERT_LT(plant.k, plant.m * kG * plant.l);
+  plant.phi = 0.02 / plant.l;
+  for (int i = 0; i < 2000; ++i) plant.step(0.0, 0.0, kDt);
+  EXPECT_GT(std::abs(plant.phi * plant.l), 0.1);
+}
+
+// ------------------------------------------------------------------ distributor
+TEST(StabilizerDistributor, DoubleSupportSplitsExactlyWithCopsInsideTheSoles) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const st::Sole sole{-0.10, 0.13, -0.065, 0.065};
+  const double margin = 0.005;
+  int reachable = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const auto feet = feetAt(0.08 + 0.05 * std::abs(u(rng)), 0.3 * u(rng), 0.3 * u(rng),
+                             0.2 * u(rng), 0.2 * u(rng));
+    const Eigen::Vector2d zmp(0.25 * u(rng), 0.2 * u(rng));
+    const Eigen::Vector3d force(30 * u(rng), 30 * u(rng), kMass * kG * (1.0 + 0.2 * u(rng)));
+    const double pref = 0.5 + 0.5 * u(rng);
+    const double min_force = trial % 2 == 0 ? 0.0 : 15.0;
+    const auto d = st::distributeWrench(zmp, force, 1.5, {{true, true}}, feet, {{sole, sole}},
+                                        margin, min_force, pref);
+    // Each CoP inside its shrunk sole.
+    for (std::size_t f = 0; f < 2; ++f) {
+      EXPECT_GE(d.wrench[f](5), min_force - 1e-9) << "minimum normal force in double support";
+      if (d.wrench[f](5) < 1e-9) continue;  // unloaded foot: no CoP
+      const Eigen::Vector2d cop = overstep::core::localCop(d.wrench[f]);
+      EXPECT_GE(cop.x(), sole.x_min + margin - 1e-9);
+      EXPECT_LE(cop.x(), sole.x_max - margin + 1e-9);
+      EXPECT_GE(cop.y(), sole.y_min + margin - 1e-9);
+      EXPECT_LE(cop.y(), sole.y_max - margin + 1e-9);
+    }
+    // The wrenches sum to the desired one: total force, vertical moment, no horizontal moment
+    // about the realised ZMP.
+    overstep::core::Vector6d sum = overstep::core::Vector6d::Zero();
+    const Eigen::Vector3d P(d.zmp.x(), d.zmp.y(), 0.0);
+    for (std::size_t f = 0; f < 2; ++f)
+      sum += overstep::core::shiftWrench(overstep::core::transformWrench(feet[f], d.wrench[f]),
+                                         Eigen::Vector3d::Zero(), P);
+    EXPECT_LT((sum.tail<3>() - force).norm(), 1e-8);
+    EXPECT_NEAR(sum(0), 0.0, 1e-6);
+    EXPECT_NEAR(sum(1), 0.0, 1e-6);
+    EXPECT_NEAR(sum(2), 1.5, 1e-8);
+    // Without a minimum force the realisable set is the hull of the soles: requests inside it
+    // are realised exactly, others go to the closest point of the hull.
+    if (min_force > 0.0) {
+      EXPECT_TRUE(d.clamped || d.error < 1e-7);
+      continue;
+    }
+    std::array<Eigen::Vector2d, 8> pts{};
+    const auto cr = st::soleCorners(sole, feet[0], margin), cl = st::soleCorners(sole, feet[1], margin);
+    std::copy(cr.begin(), cr.end(), pts.begin());
+    std::copy(cl.begin(), cl.end(), pts.begin() + 4);
+    const st::Polygon hull = st::convexHull(pts.data(), 8);
+    if (hull.contains(zmp, -1e-6)) {
+      ++reachable;
+      EXPECT_FALSE(d.clamped);
+      EXPECT_LT(d.error, 1e-7) << "trial " << trial;
+    } else if (!hull.contains(zmp, 1e-6)) {
+      EXPECT_TRUE(d.clamped);
+      EXPECT_NEAR((d.zmp - hull.closest(zmp)).norm(), 0.0, 1e-6);
+    }
+  }
+  EXPECT_GT(reachable, 30);
+}
+
+TEST(StabilizerDistributor, PreferredShareIsKeptWhenTheZmpAllowsIt) {
+  const st::Sole sole{-0.10, 0.13, -0.065, 0.065};
+  const auto feet = feetAt(0.095);
+  const Eigen::Vector3d force(0, 0, kMass * kG);
+  for (double pref : {0.2, 0.5, 0.8}) {
+    // A ZMP on the line between the ankles at the preferred share.
+    const Eigen::Vector2d zmp(0.01, -0.095 * pref + 0.095 * (1 - pref));
+    const auto d = st::distributeWrench(zmp, force, 0.0, {{true, true}}, feet, {{sole, sole}},
+                                        0.005, 15.0, pref);
+    EXPECT_NEAR(d.alpha, pref, 1e-9);
+    EXPECT_NEAR(d.wrench[0](5), pref * force.z(), 1e-6);
+  }
+  // Far in front of the right toe: the share must move to the right foot.
+  const auto d = st::distributeWrench(Eigen::Vector2d(0.12, -0.11), force, 0.0, {{true, true}},
+                                      feet, {{sole, sole}}, 0.005, 15.0, 0.5);
+  EXPECT_GT(d.alpha, 0.6);
+  // ... and only as far as needed: a share closer to the preferred 0.5 cannot realise the ZMP.
+  const auto closer = st::distributeWrench(Eigen::Vector2d(0.12, -0.11), force, 0.0, {{true, true}},
+                                           feet, {{sole, sole}}, 0.005, 15.0, d.alpha - 0.01);
+  EXPECT_NEAR(closer.alpha, d.alpha, 1e-6);
+  EXPECT_LT(d.error, 1e-7);
+}
+
+TEST(StabilizerDistributor, SingleSupportPutsTheCopAtTheZmpOrClampsIt) {
+  const st::Sole sole{-0.10, 0.13, -0.065, 0.065};
+  const auto feet = feetAt(0.1);
+  const Eigen::Vector3d force(0, 0, kMass * kG);
+  auto d = st::distributeWrench(Eigen::Vector2d(0.05, -0.12), force, 0.0, {{true, false}}, feet,
+                                {{sole, sole}}, 0.005, 15.0, 0.5);
+  EXPECT_FALSE(d.clamped);
+  EXPECT_NEAR(d.alpha, 1.0, 0.0);
+  EXPECT_TRUE(d.wrench[1].isZero());
+  EXPECT_LT((overstep::core::localCop(d.wrench[0]) - Eigen::Vector2d(0.05, -0.02)).norm(), 1e-12);
+  d = st::distributeWrench(Eigen::Vector2d(0.3, -0.1), force, 0.0, {{true, false}}, feet,
+                           {{sole, sole}}, 0.005, 15.0, 0.5);
+  EXPECT_TRUE(d.clamped);
+  EXPECT_NEAR(overstep::core::localCop(d.wrench[0]).x(), 0.13 - 0.005, 1e-12);
+  EXPECT_NEAR(d.error, 0.3 - 0.125, 1e-12);
+}
+
+// ------------------------------------------------------------------ limits, modes, faults
+TEST(StabilizerLimits, SaturationsHoldUnderLargeErrors) {
+  st::Params p = overstep::test::plantParams();
+  const auto feet = feetAt(0.1);
+  st::Reference ref = overstep::test::staticReference(Eigen::Vector2d::Zero(), feet);
+  st::Stabilizer s(p);
+  bringOn(s, ref);
+  // CoM 8 cm ahead and moving, ZMP measured at the heel, torso tilted 0.3 rad, load all on one foot.
+  st::Measurement m = overstep::test::measurementWithZmp(
+      Eigen::Vector3d(0.08, 0.0, kComHeight), Eigen::Vector3d(0.4, 0, 0),
+      Eigen::Vector2d(-0.09, -0.1), feet);
+  m.torso = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY());
+  m.foot_wrench[1] = 0.1 * m.foot_wrench[0];  // 10 % on the left foot: a large force difference
+  m.foot_wrench[0] *= 0.9;
+  st::Output out, prev;
+  std::uint32_t seen = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const st::Status stt = s.step(m, kDt, out);
+    ASSERT_TRUE(stt.ok());
+    seen |= stt.saturation;
+    for (std::size_t f = 0; f < 2; ++f) {
+      EXPECT_LE(out.foot_rotation[f].cwiseAbs().maxCoeff(), p.max_foot_rotation + 1e-12);
+      EXPECT_LE(std::abs(out.foot_height[f]), p.max_foot_height + 1e-12);
+      if (i > 0) {
+        EXPECT_LE((out.foot_rotation[f] - prev.foot_rotation[f]).cwiseAbs().maxCoeff(),
+                  p.max_foot_rotation_rate * kDt + 1e-12);
+      }
+    }
+    EXPECT_LE(out.body_attitude.cwiseAbs().maxCoeff(), p.max_body_attitude + 1e-12);
+    EXPECT_LE(out.com_offset.norm(), p.max_com_offset + 1e-12);
+    prev = out;
+  }
+  EXPECT_TRUE(seen & st::kZmpClamped);
+  EXPECT_TRUE(seen & st::kFootRotation);
+  EXPECT_TRUE(seen & st::kFootHeight);
+  EXPECT_TRUE(seen & st::kBodyAttitude);
+}
+
+TEST(StabilizerModes, RampInAndOutAreContinuous) {
+  st::Params p = overstep::test::plantParams();
+  p.ramp_time = 0.5;
+  p.com_admittance = 5.0;
+  const auto feet = feetAt(0.1);
+  st::Stabilizer s(p);
+  s.setReference(overstep::test::staticReference(Eigen::Vector2d::Zero(), feet));
+  st::Measurement m = overstep::test::measurementWithZmp(
+      Eigen::Vector3d(0.01, 0.0, kComHeight), Eigen::Vector3d::Zero(), Eigen::Vector2d(0.02, -0.1),
+      feet);
+  m.torso = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitX());
+  auto flat = [](const st::Output& o) {
+    Eigen::Matrix<double, 10, 1> v;
+    v << o.com_offset.head<2>(), o.foot_rotation[0], o.foot_rotation[1], o.foot_height[0],
+        o.foot_height[1], o.body_attitude;
+    return v;
+  };
+  st::Output out;
+  EXPECT_EQ(s.step(m, kDt, out).mode, st::Mode::Off);
+  EXPECT_TRUE(flat(out).isZero());
+  ASSERT_TRUE(s.enable());
+  Eigen::Matrix<double, 10, 1> prev = flat(out);
+  double max_jump = 0.0;
+  std::vector<st::Mode> modes;
+  for (int i = 0; i < 600; ++i) {
+    if (i == 200) s.hold();
+    if (i == 260) {
+      ASSERT_TRUE(s.enable());
+    }
+    if (i == 400) s.disable();
+    const st::Status stt = s.step(m, kDt, out);
+    if (modes.empty() || modes.back() != stt.mode) modes.push_back(stt.mode);
+    const auto v = flat(out);
+    max_jump = std::max(max_jump, (v - prev).cwiseAbs().maxCoeff());
+    if (i > 200 && i < 260) {
+      EXPECT_EQ(v, prev) << "hold freezes the output";
+    }
+    prev = v;
+  }
+  EXPECT_EQ(modes, (std::vector<st::Mode>{st::Mode::RampIn, st::Mode::On, st::Mode::Hold,
+                                          st::Mode::On, st::Mode::RampOut, st::Mode::Off}));
+  EXPECT_TRUE(prev.isZero()) << "off after the ramp-out";
+  // Largest per-tick change: bounded by the rate limits plus the ramp's slope times the output.
+  EXPECT_LT(max_jump, 0.004);
+}
+
+TEST(StabilizerFaults, NanInputGivesAFaultAndHoldsTheLastOutput) {
+  st::Params p = overstep::test::plantParams();
+  const auto feet = feetAt(0.1);
+  st::Stabilizer s(p);
+  const st::Reference ref = overstep::test::staticReference(Eigen::Vector2d::Zero(), feet);
+  bringOn(s, ref);
+  st::Measurement m = overstep::test::measurementWithZmp(
+      Eigen::Vector3d(0.01, 0, kComHeight), Eigen::Vector3d::Zero(), Eigen::Vector2d(0.0, -0.1), feet);
+  st::Output out;
+  for (int i = 0; i < 50; ++i) s.step(m, kDt, out);
+  const st::Output before = out;
+  st::Measurement bad = m;
+  bad.foot_wrench[1](3) = std::numeric_limits<double>::quiet_NaN();
+  st::Status stt = s.step(bad, kDt, out);
+  EXPECT_EQ(stt.fault, st::Fault::NonFiniteMeasurement);
+  EXPECT_EQ(stt.mode, st::Mode::Hold);
+  EXPECT_EQ(out.foot_rotation[0], before.foot_rotation[0]);
+  EXPECT_EQ(out.body_attitude, before.body_attitude);
+  EXPECT_TRUE(out.foot_rotation[0].allFinite());
+  // Valid data again: still holding (the fault is latched), enable refused until reset.
+  stt = s.step(m, kDt, out);
+  EXPECT_EQ(stt.mode, st::Mode::Hold);
+  EXPECT_FALSE(s.enable());
+  // Ramp-out of the frozen output works even while the input stays invalid.
+  s.disable();
+  for (int i = 0; i < 10; ++i) stt = s.step(bad, kDt, out);
+  EXPECT_EQ(stt.mode, st::Mode::Off);
+  EXPECT_TRUE(out.foot_rotation[0].isZero());
+  s.reset();
+  EXPECT_TRUE(s.status().ok());
+  EXPECT_TRUE(s.enable());
+}
+
+TEST(StabilizerFaults, EachBadInputNamesItsFault) {
+  st::Params p = overstep::test::plantParams();
+  const auto feet = feetAt(0.1);
+  const st::Reference good = overstep::test::staticReference(Eigen::Vector2d::Zero(), feet);
+  const st::Measurement m = overstep::test::measurementWithZmp(
+      good.com, Eigen::Vector3d::Zero(), Eigen::Vector2d(0.0, -0.1), feet);
+  auto faultOf = [&](st::Reference r, st::Measurement mm, double dt) {
+    st::Stabilizer s(p);
+    s.setReference(r);
+    s.enable();
+    st::Output out;
+    return s.step(mm, dt, out).fault;
+  };
+  EXPECT_EQ(faultOf(good, m, kDt), st::Fault::None);
+  EXPECT_EQ(faultOf(good, m, 0.0), st::Fault::BadTimeStep);
+  EXPECT_EQ(faultOf(good, m, std::nan("")), st::Fault::BadTimeStep);
+  st::Reference r = good;
+  r.com.x() = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(faultOf(r, m, kDt), st::Fault::NonFiniteReference);
+  r = good;
+  r.foot[0].contact = r.foot[1].contact = false;
+  EXPECT_EQ(faultOf(r, m, kDt), st::Fault::NoSupport);
+  st::Measurement mm = m;
+  mm.torso.coeffs() << 0, 0, 0, 0;
+  EXPECT_EQ(faultOf(good, mm, kDt), st::Fault::NonFiniteMeasurement);
+  mm = m;
+  mm.com.x() += 0.2;
+  EXPECT_EQ(faultOf(good, mm, kDt), st::Fault::ComErrorTooLarge);
+  mm = m;
+  mm.torso = Eigen::AngleAxisd(0.8, Eigen::Vector3d::UnitX());
+  EXPECT_EQ(faultOf(good, mm, kDt), st::Fault::TorsoTiltTooLarge);
+}
+
+// ------------------------------------------------------------------ parameters
+TEST(StabilizerParams, LoadsTheRobotSectionAndRefusesBadValues) {
+  const st::Params p = st::loadParams(overstep::test::hrp2Yaml());
+  EXPECT_NEAR(p.sole[0].y_min, -0.075, 1e-12);  // right foot: outer side is -y
+  EXPECT_NEAR(p.sole[1].y_max, 0.075, 1e-12);
+  EXPECT_NEAR(p.sole[0].x_max, 0.13, 1e-12);
+  st::Params with_mass = p;
+  with_mass.mass = 58.0;
+  EXPECT_EQ(st::validate(with_mass), "");
+  EXPECT_NE(st::validate(p), "") << "mass must be set by the caller";
+
+  overstep::test::TempDir dir;
+  const std::string base = overstep::test::slurp(overstep::test::hrp2Yaml());
+  auto loadWith = [&](const std::string& section) {
+    // the robot YAML's urdf path is relative to the YAML: keep the file beside the URDF copy
+    overstep::test::writeText(dir.path() / "hrp2.urdf", overstep::test::slurp(overstep::test::hrp2Urdf()));
+    std::string text = base;
+    const auto pos = text.find("\nstabilizer:");
+    if (pos != std::string::npos) text = text.substr(0, pos + 1);
+    overstep::test::writeText(dir.path() / "r.yaml", text + section);
+    return st::loadParams(dir.file("r.yaml"));
+  };
+  EXPECT_NO_THROW(loadWith("stabilizer:\n  damping_pitch: 25\n  feedback: dcm\n"));
+  EXPECT_EQ(loadWith("stabilizer:\n  feedback: dcm\n").feedback, st::Feedback::Dcm);
+  auto message = [&](const std::string& section) {
+    try {
+      loadWith(section);
+    } catch (const overstep::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("stabilizer:\n  damping_pitch: -3\n").find("stabilizer.damping_pitch"),
+            std::string::npos);
+  EXPECT_NE(message("stabilizer:\n  dampnig_pitch: 3\n").find("unknown parameter"), std::string::npos);
+  EXPECT_NE(message("stabilizer:\n  feedback: pid\n").find("lipm or dcm"), std::string::npos);
+  EXPECT_NE(message("stabilizer:\n  lipm_poles: [1, 2]\n").find("lipm_poles"), std::string::npos);
+  EXPECT_NE(message("stabilizer:\n  max_foot_rotation: abc\n").find("expected a number"),
+            std::string::npos);
+  EXPECT_THROW(st::Stabilizer{p}, overstep::InputError);  // mass 0
+}
