@@ -138,9 +138,10 @@ int runPlan(const PlanOptions& o) {
   std::fprintf(
       log,
       "%s: duration %.3f s, step length %.3f m, foot spacing %.3f m, %d iterations, %.1f s -> %s\n",
-      out.valid ? "valid plan" : "no valid plan", summary["duration"].get<double>(),
-      summary["step_length"].get<double>(), summary["foot_spacing"].get<double>(), out.iterations,
-      out.solve_time, path.c_str());
+      valid ? "valid plan"
+            : (out.valid ? "planner-feasible, rejected by the 1 kHz check" : "no valid plan"),
+      summary["duration"].get<double>(), summary["step_length"].get<double>(),
+      summary["foot_spacing"].get<double>(), out.iterations, out.solve_time, path.c_str());
   if (o.json) std::cout << summary.dump(2) << "\n";
   if (g_stop.load()) {
     cli::printError("plan", "interrupted; best attempt written to " + path);

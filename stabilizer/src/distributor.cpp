@@ -110,8 +110,9 @@ Eigen::Vector2d Polygon::closest(const Eigen::Vector2d& p) const {
 std::array<Eigen::Vector2d, 4> soleCorners(const Sole& s, const Eigen::Isometry3d& X_WS,
                                            double margin) {
   const Box2 b = makeBox(s, X_WS, margin);
-  return {b.origin + b.R * Eigen::Vector2d(b.x0, b.y0), b.origin + b.R * Eigen::Vector2d(b.x1, b.y0),
-          b.origin + b.R * Eigen::Vector2d(b.x1, b.y1), b.origin + b.R * Eigen::Vector2d(b.x0, b.y1)};
+  return {
+      b.origin + b.R * Eigen::Vector2d(b.x0, b.y0), b.origin + b.R * Eigen::Vector2d(b.x1, b.y0),
+      b.origin + b.R * Eigen::Vector2d(b.x1, b.y1), b.origin + b.R * Eigen::Vector2d(b.x0, b.y1)};
 }
 
 Polygon convexHull(const Eigen::Vector2d* pts, int n) {
@@ -132,7 +133,8 @@ Polygon convexHull(const Eigen::Vector2d* pts, int n) {
   }
   Polygon h;
   if (n < 3) {
-    for (int i = 0; i < n; ++i) h.v[static_cast<std::size_t>(h.n++)] = s[static_cast<std::size_t>(i)];
+    for (int i = 0; i < n; ++i)
+      h.v[static_cast<std::size_t>(h.n++)] = s[static_cast<std::size_t>(i)];
     return h;
   }
   std::array<Eigen::Vector2d, 2 * kIn + 1> out;  // Andrew's monotone chain
@@ -158,7 +160,8 @@ Distribution distributeWrench(const Eigen::Vector2d& zmp, const Eigen::Vector3d&
                               const std::array<Sole, 2>& sole, double margin, double min_force,
                               double alpha_pref) {
   Distribution d;
-  const Box2 box[2] = {makeBox(sole[0], sole_pose[0], margin), makeBox(sole[1], sole_pose[1], margin)};
+  const Box2 box[2] = {makeBox(sole[0], sole_pose[0], margin),
+                       makeBox(sole[1], sole_pose[1], margin)};
   Eigen::Vector2d p = zmp;
   if (contact[0] && contact[1]) {
     const double fz = std::max(force.z(), 1e-9);
@@ -248,7 +251,8 @@ Distribution distributeWrench(const Eigen::Vector2d& zmp, const Eigen::Vector3d&
         alpha = al;
         // A foot without load keeps its CoP at its ankle (its wrench is zero anyway).
         const Eigen::Vector2d pr = al > 1e-12 ? Eigen::Vector2d(sr / al) : box[0].origin;
-        const Eigen::Vector2d pl = al < 1.0 - 1e-12 ? Eigen::Vector2d(sl / (1.0 - al)) : box[1].origin;
+        const Eigen::Vector2d pl =
+            al < 1.0 - 1e-12 ? Eigen::Vector2d(sl / (1.0 - al)) : box[1].origin;
         s = {pr, pl, (sr + sl - p).norm()};
         break;
       }
@@ -260,7 +264,8 @@ Distribution distributeWrench(const Eigen::Vector2d& zmp, const Eigen::Vector3d&
     if (f < 0) return d;  // no support: zero wrenches
     const Polygon poly = [&] {
       Polygon q;
-      const auto c = soleCorners(sole[static_cast<std::size_t>(f)], sole_pose[static_cast<std::size_t>(f)], margin);
+      const auto c = soleCorners(sole[static_cast<std::size_t>(f)],
+                                 sole_pose[static_cast<std::size_t>(f)], margin);
       for (const auto& v : c) q.v[static_cast<std::size_t>(q.n++)] = v;
       return q;
     }();
@@ -270,7 +275,8 @@ Distribution distributeWrench(const Eigen::Vector2d& zmp, const Eigen::Vector3d&
     }
     d.alpha = f == 0 ? 1.0 : 0.0;
     d.cop_world[static_cast<std::size_t>(f)] = p;
-    d.cop_world[static_cast<std::size_t>(1 - f)] = sole_pose[static_cast<std::size_t>(1 - f)].translation().head<2>();
+    d.cop_world[static_cast<std::size_t>(1 - f)] =
+        sole_pose[static_cast<std::size_t>(1 - f)].translation().head<2>();
   }
   const double share[2] = {d.alpha, 1.0 - d.alpha};
   d.zmp.setZero();

@@ -68,7 +68,8 @@ std::string validate(const Params& p) {
       return "stabilizer.lipm_poles: expected decay rates in 0.1 to 100 1/s, got " + fmt(l);
   }
   if (!(p.mass > 0.0 && p.mass < 1000.0))
-    return "stabilizer mass: expected 0 to 1000 kg (set it from the robot model), got " + fmt(p.mass);
+    return "stabilizer mass: expected 0 to 1000 kg (set it from the robot model), got " +
+           fmt(p.mass);
   for (const auto& s : p.sole)
     if (!(s.x_min < s.x_max && s.y_min < s.y_max && s.x_min <= 0.0 && s.x_max >= 0.0 &&
           s.y_min <= 0.0 && s.y_max >= 0.0))
@@ -82,7 +83,8 @@ Params loadParams(const std::string& robot_yaml) {
   p.gravity = d.gravity;
   for (int f = 0; f < 2; ++f) {
     const core::FootDescription* foot = d.foot(f == 0 ? "right" : "left");
-    if (!foot) throw InputError(robot_yaml + ": feet: the stabilizer needs a right and a left foot");
+    if (!foot)
+      throw InputError(robot_yaml + ": feet: the stabilizer needs a right and a left foot");
     auto& s = p.sole[static_cast<std::size_t>(f)];
     s.x_min = -foot->sole.x_back;
     s.x_max = foot->sole.x_front;
@@ -126,7 +128,8 @@ Params loadParams(const std::string& robot_yaml) {
       try {
         p.*(spec->field) = kv.second.as<double>();
       } catch (const YAML::Exception&) {
-        throw InputError(where + ": expected a number, got '" + kv.second.as<std::string>("?") + "'");
+        throw InputError(where + ": expected a number, got '" + kv.second.as<std::string>("?") +
+                         "'");
       }
     }
   }
@@ -138,8 +141,8 @@ Params loadParams(const std::string& robot_yaml) {
 }
 
 std::array<double, 3> gainsFromPoles(const std::array<double, 3>& l, double omega, double tp) {
-  // Closed loop of e = (dc, dcd, dp): dcdd = w^2 (dc - dp), dpd = (k1 dc + k2 dcd + k3 dp - dp) / Tp.
-  // Characteristic polynomial s^3 + (1 - k3)/Tp s^2 + w^2 (k2/Tp - 1) s + w^2 (k1 + k3 - 1)/Tp
+  // Closed loop of e = (dc, dcd, dp): dcdd = w^2 (dc - dp), dpd = (k1 dc + k2 dcd + k3 dp - dp) /
+  // Tp. Characteristic polynomial s^3 + (1 - k3)/Tp s^2 + w^2 (k2/Tp - 1) s + w^2 (k1 + k3 - 1)/Tp
   // matched to (s + l1)(s + l2)(s + l3) = s^3 + c2 s^2 + c1 s + c0.
   const double c2 = l[0] + l[1] + l[2];
   const double c1 = l[0] * l[1] + l[0] * l[2] + l[1] * l[2];

@@ -59,24 +59,36 @@ void scaleInto(const Output& raw, double s, Output& out) {
 
 const char* toString(Mode m) {
   switch (m) {
-    case Mode::Off: return "off";
-    case Mode::RampIn: return "ramp_in";
-    case Mode::On: return "on";
-    case Mode::RampOut: return "ramp_out";
-    case Mode::Hold: return "hold";
+    case Mode::Off:
+      return "off";
+    case Mode::RampIn:
+      return "ramp_in";
+    case Mode::On:
+      return "on";
+    case Mode::RampOut:
+      return "ramp_out";
+    case Mode::Hold:
+      return "hold";
   }
   return "?";
 }
 
 const char* toString(Fault f) {
   switch (f) {
-    case Fault::None: return "none";
-    case Fault::NonFiniteReference: return "non-finite reference";
-    case Fault::NonFiniteMeasurement: return "non-finite or invalid measurement";
-    case Fault::BadTimeStep: return "time step out of range";
-    case Fault::ComErrorTooLarge: return "CoM error too large";
-    case Fault::TorsoTiltTooLarge: return "torso tilt too large";
-    case Fault::NoSupport: return "reference has no foot in contact";
+    case Fault::None:
+      return "none";
+    case Fault::NonFiniteReference:
+      return "non-finite reference";
+    case Fault::NonFiniteMeasurement:
+      return "non-finite or invalid measurement";
+    case Fault::BadTimeStep:
+      return "time step out of range";
+    case Fault::ComErrorTooLarge:
+      return "CoM error too large";
+    case Fault::TorsoTiltTooLarge:
+      return "torso tilt too large";
+    case Fault::NoSupport:
+      return "reference has no foot in contact";
   }
   return "?";
 }
@@ -123,7 +135,8 @@ bool Stabilizer::enable() {
       status_.mode = ramp_ >= 1.0 ? Mode::On : Mode::RampIn;
       return true;
     case Mode::RampIn:
-    case Mode::On: return true;
+    case Mode::On:
+      return true;
   }
   return false;
 }
@@ -137,9 +150,12 @@ void Stabilizer::disable() {
       status_.mode = Mode::RampOut;
       break;
     case Mode::RampIn:
-    case Mode::On: status_.mode = Mode::RampOut; break;
+    case Mode::On:
+      status_.mode = Mode::RampOut;
+      break;
     case Mode::Off:
-    case Mode::RampOut: break;
+    case Mode::RampOut:
+      break;
   }
 }
 
@@ -222,8 +238,7 @@ void Stabilizer::runFeedback(const Measurement& m, double dt, Output& o) {
   const std::array<bool, 2> contact{{r.foot[0].contact, r.foot[1].contact}};
   const double fr = std::max(r.foot[0].wrench(5), 0.0), fl = std::max(r.foot[1].wrench(5), 0.0);
   const double alpha_pref = fr + fl > 1e-6 ? fr / (fr + fl) : 0.5;
-  const Eigen::Vector3d force =
-      p.mass * (r.com_acc + Eigen::Vector3d(0.0, 0.0, p.gravity));
+  const Eigen::Vector3d force = p.mass * (r.com_acc + Eigen::Vector3d(0.0, 0.0, p.gravity));
   const double mz = r.foot[0].wrench(2) + r.foot[1].wrench(2);
   o.distribution = distributeWrench(u, force, mz, contact, m.foot_pose, p.sole, p.cop_margin,
                                     p.min_ds_force, alpha_pref);
@@ -236,10 +251,9 @@ void Stabilizer::runFeedback(const Measurement& m, double dt, Output& o) {
     Eigen::Vector2d& th = o.foot_rotation[f];
     for (int a = 0; a < 2; ++a) {
       const double D = a == 0 ? p.damping_roll : p.damping_pitch;
-      const double rate =
-          loaded ? (m.foot_wrench[f](a) - o.distribution.wrench[f](a)) / D -
-                       th(a) / p.damping_time_constant
-                 : -th(a) / p.swing_time_constant;
+      const double rate = loaded ? (m.foot_wrench[f](a) - o.distribution.wrench[f](a)) / D -
+                                       th(a) / p.damping_time_constant
+                                 : -th(a) / p.swing_time_constant;
       th(a) = integrateClamped(th(a), rate, dt, p.max_foot_rotation_rate, p.max_foot_rotation, sat,
                                kFootRotationRate, kFootRotation);
     }
@@ -271,7 +285,8 @@ void Stabilizer::runFeedback(const Measurement& m, double dt, Output& o) {
   } else {
     com_offset_vel_ -= com_offset_vel_ * std::min(dt / p.com_leak_time, 1.0);
   }
-  Eigen::Vector2d c = o.com_offset.head<2>() + (com_offset_vel_ - o.com_offset.head<2>() / p.com_leak_time) * dt;
+  Eigen::Vector2d c =
+      o.com_offset.head<2>() + (com_offset_vel_ - o.com_offset.head<2>() / p.com_leak_time) * dt;
   if (c.norm() > p.max_com_offset) {
     c *= p.max_com_offset / c.norm();
     com_offset_vel_.setZero();  // anti-windup

@@ -26,7 +26,8 @@ inline stabilizer::Params plantParams() {
 inline std::array<Eigen::Isometry3d, 2> feetAt(double half_width, double yaw_r = 0.0,
                                                double yaw_l = 0.0, double x_r = 0.0,
                                                double x_l = 0.0) {
-  std::array<Eigen::Isometry3d, 2> X{{Eigen::Isometry3d::Identity(), Eigen::Isometry3d::Identity()}};
+  std::array<Eigen::Isometry3d, 2> X{
+      {Eigen::Isometry3d::Identity(), Eigen::Isometry3d::Identity()}};
   X[0].linear() = Eigen::AngleAxisd(yaw_r, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   X[1].linear() = Eigen::AngleAxisd(yaw_l, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   X[0].translation() << x_r, -half_width, 0.0;

@@ -56,9 +56,9 @@ std::array<double, 3> identifiedDecayRates(st::Params p, double T) {
     const int n = static_cast<int>(std::lround(T / dt));
     st::Output out;
     for (int i = 0; i < n; ++i) {
-      const auto meas = overstep::test::measurementWithZmp(
-          Eigen::Vector3d(plant.c, 0, kComHeight), Eigen::Vector3d(plant.cd, 0, 0),
-          Eigen::Vector2d(plant.p, 0), feet);
+      const auto meas = overstep::test::measurementWithZmp(Eigen::Vector3d(plant.c, 0, kComHeight),
+                                                           Eigen::Vector3d(plant.cd, 0, 0),
+                                                           Eigen::Vector2d(plant.p, 0), feet);
       s.step(meas, dt, out);
       EXPECT_FALSE(out.distribution.clamped);
       plant.step(out.zmp_desired.x(), dt);
@@ -118,9 +118,9 @@ TEST(StabilizerLipm, ImpulsePushDecaysAndTheZmpSettlesOnAConstantReference) {
   for (int i = 0; i < 2000; ++i) {  // 10 s
     const double t = i * kDt;
     if (i == 600) plant.cd += 0.1;  // impulse push at 3 s: +0.1 m/s
-    const auto meas = overstep::test::measurementWithZmp(
-        Eigen::Vector3d(plant.c, 0, kComHeight), Eigen::Vector3d(plant.cd, 0, 0),
-        Eigen::Vector2d(plant.p, 0), feet);
+    const auto meas = overstep::test::measurementWithZmp(Eigen::Vector3d(plant.c, 0, kComHeight),
+                                                         Eigen::Vector3d(plant.cd, 0, 0),
+                                                         Eigen::Vector2d(plant.p, 0), feet);
     s.step(meas, kDt, out);
     plant.step(out.zmp_desired.x(), kDt);
     if (t > 3.0) peak_after_push = std::max(peak_after_push, std::abs(plant.c - zmp_ref.x()));
@@ -153,9 +153,9 @@ TEST(StabilizerDcm, DcmErrorDecaysAtKpWithIdealZmpTracking) {
   st::Output out;
   double xi0 = 0.0;
   for (int i = 0; i <= 200; ++i) {
-    const auto meas = overstep::test::measurementWithZmp(
-        Eigen::Vector3d(plant.c, 0, kComHeight), Eigen::Vector3d(plant.cd, 0, 0),
-        Eigen::Vector2d(plant.p, 0), feet);
+    const auto meas = overstep::test::measurementWithZmp(Eigen::Vector3d(plant.c, 0, kComHeight),
+                                                         Eigen::Vector3d(plant.cd, 0, 0),
+                                                         Eigen::Vector2d(plant.p, 0), feet);
     s.step(meas, kDt, out);
     if (i == 0) xi0 = out.dcm_error.x();
     if (i == 200) {
@@ -182,9 +182,9 @@ TEST(StabilizerDcm, LeakyIntegralRemovesMostOfAConstantZmpBias) {
     plant.tp = p.zmp_delay;
     st::Output out;
     for (int i = 0; i < 6000; ++i) {
-      const auto meas = overstep::test::measurementWithZmp(
-          Eigen::Vector3d(plant.c, 0, kComHeight), Eigen::Vector3d(plant.cd, 0, 0),
-          Eigen::Vector2d(plant.p, 0), feet);
+      const auto meas = overstep::test::measurementWithZmp(Eigen::Vector3d(plant.c, 0, kComHeight),
+                                                           Eigen::Vector3d(plant.cd, 0, 0),
+                                                           Eigen::Vector2d(plant.p, 0), feet);
       s.step(meas, kDt, out);
       plant.step(out.zmp_desired.x() + 0.01, kDt);
     }
@@ -286,7 +286,8 @@ TEST(StabilizerDistributor, DoubleSupportSplitsExactlyWithCopsInsideTheSoles) {
       continue;
     }
     std::array<Eigen::Vector2d, 8> pts{};
-    const auto cr = st::soleCorners(sole, feet[0], margin), cl = st::soleCorners(sole, feet[1], margin);
+    const auto cr = st::soleCorners(sole, feet[0], margin),
+               cl = st::soleCorners(sole, feet[1], margin);
     std::copy(cr.begin(), cr.end(), pts.begin());
     std::copy(cl.begin(), cl.end(), pts.begin() + 4);
     const st::Polygon hull = st::convexHull(pts.data(), 8);
@@ -349,10 +350,11 @@ TEST(StabilizerLimits, SaturationsHoldUnderLargeErrors) {
   st::Reference ref = overstep::test::staticReference(Eigen::Vector2d::Zero(), feet);
   st::Stabilizer s(p);
   bringOn(s, ref);
-  // CoM 8 cm ahead and moving, ZMP measured at the heel, torso tilted 0.3 rad, load all on one foot.
-  st::Measurement m = overstep::test::measurementWithZmp(
-      Eigen::Vector3d(0.08, 0.0, kComHeight), Eigen::Vector3d(0.4, 0, 0),
-      Eigen::Vector2d(-0.09, -0.1), feet);
+  // CoM 8 cm ahead and moving, ZMP measured at the heel, torso tilted 0.3 rad, load all on one
+  // foot.
+  st::Measurement m = overstep::test::measurementWithZmp(Eigen::Vector3d(0.08, 0.0, kComHeight),
+                                                         Eigen::Vector3d(0.4, 0, 0),
+                                                         Eigen::Vector2d(-0.09, -0.1), feet);
   m.torso = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY());
   m.foot_wrench[1] = 0.1 * m.foot_wrench[0];  // 10 % on the left foot: a large force difference
   m.foot_wrench[0] *= 0.9;
@@ -387,9 +389,9 @@ TEST(StabilizerModes, RampInAndOutAreContinuous) {
   const auto feet = feetAt(0.1);
   st::Stabilizer s(p);
   s.setReference(overstep::test::staticReference(Eigen::Vector2d::Zero(), feet));
-  st::Measurement m = overstep::test::measurementWithZmp(
-      Eigen::Vector3d(0.01, 0.0, kComHeight), Eigen::Vector3d::Zero(), Eigen::Vector2d(0.02, -0.1),
-      feet);
+  st::Measurement m = overstep::test::measurementWithZmp(Eigen::Vector3d(0.01, 0.0, kComHeight),
+                                                         Eigen::Vector3d::Zero(),
+                                                         Eigen::Vector2d(0.02, -0.1), feet);
   m.torso = Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitX());
   auto flat = [](const st::Output& o) {
     Eigen::Matrix<double, 10, 1> v;
@@ -432,8 +434,9 @@ TEST(StabilizerFaults, NanInputGivesAFaultAndHoldsTheLastOutput) {
   st::Stabilizer s(p);
   const st::Reference ref = overstep::test::staticReference(Eigen::Vector2d::Zero(), feet);
   bringOn(s, ref);
-  st::Measurement m = overstep::test::measurementWithZmp(
-      Eigen::Vector3d(0.01, 0, kComHeight), Eigen::Vector3d::Zero(), Eigen::Vector2d(0.0, -0.1), feet);
+  st::Measurement m =
+      overstep::test::measurementWithZmp(Eigen::Vector3d(0.01, 0, kComHeight),
+                                         Eigen::Vector3d::Zero(), Eigen::Vector2d(0.0, -0.1), feet);
   st::Output out;
   for (int i = 0; i < 50; ++i) s.step(m, kDt, out);
   const st::Output before = out;
@@ -463,8 +466,8 @@ TEST(StabilizerFaults, EachBadInputNamesItsFault) {
   st::Params p = overstep::test::plantParams();
   const auto feet = feetAt(0.1);
   const st::Reference good = overstep::test::staticReference(Eigen::Vector2d::Zero(), feet);
-  const st::Measurement m = overstep::test::measurementWithZmp(
-      good.com, Eigen::Vector3d::Zero(), Eigen::Vector2d(0.0, -0.1), feet);
+  const st::Measurement m = overstep::test::measurementWithZmp(good.com, Eigen::Vector3d::Zero(),
+                                                               Eigen::Vector2d(0.0, -0.1), feet);
   auto faultOf = [&](st::Reference r, st::Measurement mm, double dt) {
     st::Stabilizer s(p);
     s.setReference(r);
@@ -507,7 +510,8 @@ TEST(StabilizerParams, LoadsTheRobotSectionAndRefusesBadValues) {
   const std::string base = overstep::test::slurp(overstep::test::hrp2Yaml());
   auto loadWith = [&](const std::string& section) {
     // the robot YAML's urdf path is relative to the YAML: keep the file beside the URDF copy
-    overstep::test::writeText(dir.path() / "hrp2.urdf", overstep::test::slurp(overstep::test::hrp2Urdf()));
+    overstep::test::writeText(dir.path() / "hrp2.urdf",
+                              overstep::test::slurp(overstep::test::hrp2Urdf()));
     std::string text = base;
     const auto pos = text.find("\nstabilizer:");
     if (pos != std::string::npos) text = text.substr(0, pos + 1);
@@ -526,7 +530,8 @@ TEST(StabilizerParams, LoadsTheRobotSectionAndRefusesBadValues) {
   };
   EXPECT_NE(message("stabilizer:\n  damping_pitch: -3\n").find("stabilizer.damping_pitch"),
             std::string::npos);
-  EXPECT_NE(message("stabilizer:\n  dampnig_pitch: 3\n").find("unknown parameter"), std::string::npos);
+  EXPECT_NE(message("stabilizer:\n  dampnig_pitch: 3\n").find("unknown parameter"),
+            std::string::npos);
   EXPECT_NE(message("stabilizer:\n  feedback: pid\n").find("lipm or dcm"), std::string::npos);
   EXPECT_NE(message("stabilizer:\n  lipm_poles: [1, 2]\n").find("lipm_poles"), std::string::npos);
   EXPECT_NE(message("stabilizer:\n  max_foot_rotation: abc\n").find("expected a number"),

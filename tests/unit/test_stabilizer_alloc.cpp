@@ -34,18 +34,22 @@ TEST(StabilizerRealTime, StepNeverAllocates) {
     const auto feet = overstep::test::feetAt(0.1);
     st::Stabilizer s(p);
     st::Reference ds = overstep::test::staticReference(Eigen::Vector2d(0.0, 0.0), feet);
-    st::Reference ss = overstep::test::staticReference(Eigen::Vector2d(0.0, -0.1), feet, {{true, false}});
+    st::Reference ss =
+        overstep::test::staticReference(Eigen::Vector2d(0.0, -0.1), feet, {{true, false}});
     st::Output out;
-    st::Measurement m = overstep::test::measurementWithZmp(
-        Eigen::Vector3d(0.01, 0, 0.8), Eigen::Vector3d(0.05, 0, 0), Eigen::Vector2d(0.3, 0.2), feet);
+    st::Measurement m = overstep::test::measurementWithZmp(Eigen::Vector3d(0.01, 0, 0.8),
+                                                           Eigen::Vector3d(0.05, 0, 0),
+                                                           Eigen::Vector2d(0.3, 0.2), feet);
     st::Measurement bad = m;
     bad.com.x() = std::nan("");
     s.enable();
     const long before = g_allocations.load();
     for (int i = 0; i < 2000; ++i) {
       s.setReference(i % 400 < 200 ? ds : ss);  // double and single support, clamped ZMP requests
-      if (i == 1500) s.step(bad, 0.005, out);   // fault -> hold
-      else s.step(m, 0.005, out);
+      if (i == 1500)
+        s.step(bad, 0.005, out);  // fault -> hold
+      else
+        s.step(m, 0.005, out);
       if (i == 1600) s.disable();  // ramp out of the hold
     }
     EXPECT_EQ(g_allocations.load() - before, 0) << "heap allocations inside step()";

@@ -38,8 +38,8 @@ struct Distribution {
   /// [torque; force] about the sole origin, in the sole frame.
   std::array<core::Vector6d, 2> wrench{{core::Vector6d::Zero(), core::Vector6d::Zero()}};
   Eigen::Vector2d zmp{Eigen::Vector2d::Zero()};  ///< realised ZMP (force-weighted mean of the CoPs)
-  double error = 0.0;   ///< |realised - requested ZMP|, m (0 when the request is reachable)
-  bool clamped = false; ///< the requested ZMP was outside what the soles can realise
+  double error = 0.0;    ///< |realised - requested ZMP|, m (0 when the request is reachable)
+  bool clamped = false;  ///< the requested ZMP was outside what the soles can realise
 };
 
 /// Splits the total contact force `force` (world, N) acting at the desired ZMP `zmp` (world x, y;

@@ -1,8 +1,8 @@
 #pragma once
 /// \file
 /// Stabilizer parameters: the `stabilizer:` section of the robot YAML plus the sole rectangles of
-/// its `feet:` section. Every gain and output limit has a safety range (kParamTable) that the loader
-/// and validate() enforce. Units: SI (m, s, rad, N, N m).
+/// its `feet:` section. Every gain and output limit has a safety range (kParamTable) that the
+/// loader and validate() enforce. Units: SI (m, s, rad, N, N m).
 
 #include <array>
 #include <string>
@@ -11,7 +11,8 @@ namespace overstep::stabilizer {
 
 /// Which CoM feedback law turns CoM/ZMP errors into the desired ZMP.
 enum class Feedback {
-  Lipm,  ///< Kajita 2010: state feedback on CoM position, CoM velocity and ZMP error (ZMP lag model)
+  Lipm,  ///< Kajita 2010: state feedback on CoM position, CoM velocity and ZMP error (ZMP lag
+         ///< model)
   Dcm,   ///< Caron 2019: DCM proportional + leaky-integral feedback
 };
 
@@ -22,8 +23,8 @@ struct Sole {
 
 struct Params {
   // ---- robot (filled by the caller from the model; not in the YAML section)
-  double mass = 0.0;     ///< kg, total
-  double gravity = 9.81; ///< m/s^2
+  double mass = 0.0;           ///< kg, total
+  double gravity = 9.81;       ///< m/s^2
   std::array<Sole, 2> sole{};  ///< [right, left]
 
   // ---- CoM feedback
@@ -33,15 +34,15 @@ struct Params {
   /// the gains follow from the CoM height each tick (gainsFromPoles). The defaults give
   /// k = (1.41, 0.41, 0.08) at z = 0.8 m, close to hrpsys-base's 0.9 x (1.414, 0.404, 0.18).
   std::array<double, 3> lipm_poles{{2.5, 4.0, 12.0}};
-  double dcm_kp = 4.0;           ///< 1/s, DCM proportional gain (Caron 2019: 4 for HRP-2Kai)
-  double dcm_ki = 15.0;          ///< 1/s^2, gain of the leaky DCM error integral
+  double dcm_kp = 4.0;              ///< 1/s, DCM proportional gain (Caron 2019: 4 for HRP-2Kai)
+  double dcm_ki = 15.0;             ///< 1/s^2, gain of the leaky DCM error integral
   double dcm_integral_time = 10.0;  ///< s, leak time constant of the DCM error integral
-  double zmp_feedforward = 1.0;  ///< 0..1, fraction of Tp * zmp_rate added to the ZMP command
+  double zmp_feedforward = 1.0;     ///< 0..1, fraction of Tp * zmp_rate added to the ZMP command
 
   // ---- wrench distribution
-  double cop_margin = 0.005;      ///< m, the desired CoPs stay this far inside the sole edges
-  double min_ds_force = 15.0;     ///< N, least normal force per foot in double support
-  double contact_force = 30.0;    ///< N, measured Fz above which a foot counts as loaded
+  double cop_margin = 0.005;    ///< m, the desired CoPs stay this far inside the sole edges
+  double min_ds_force = 15.0;   ///< N, least normal force per foot in double support
+  double contact_force = 30.0;  ///< N, measured Fz above which a foot counts as loaded
 
   // ---- foot damping (ankle torque) control, per foot: d(theta)/dt = (M - M_d)/D - theta/T
   /// N m s/rad (D for the sole-frame x / y moment). On the flexible-ankle pendulum at 200 Hz
@@ -49,31 +50,31 @@ struct Params {
   /// D <= 20 oscillates or drifts (measured); 60 sits in the middle.
   double damping_roll = 60.0;
   double damping_pitch = 60.0;
-  double damping_time_constant = 1.0;  ///< s (T), leak back to the reference
-  double swing_time_constant = 0.1;    ///< s, return to zero while the foot is in the air
-  double max_foot_rotation = 0.17;     ///< rad, |roll|, |pitch| correction (about 10 deg)
-  double max_foot_rotation_rate = 0.5; ///< rad/s
+  double damping_time_constant = 1.0;   ///< s (T), leak back to the reference
+  double swing_time_constant = 0.1;     ///< s, return to zero while the foot is in the air
+  double max_foot_rotation = 0.17;      ///< rad, |roll|, |pitch| correction (about 10 deg)
+  double max_foot_rotation_rate = 0.5;  ///< rad/s
 
   // ---- foot force difference control: d(z)/dt = K ((F_L - F_R) - (F_L - F_R)_d) - z / T
-  double force_difference_gain = 1.0e-4;      ///< m/(N s)
+  double force_difference_gain = 1.0e-4;        ///< m/(N s)
   double force_difference_time_constant = 1.0;  ///< s
-  double max_foot_height = 0.02;               ///< m, |height offset| per foot
+  double max_foot_height = 0.02;                ///< m, |height offset| per foot
 
   // ---- body posture control from the IMU: d(phi)/dt = K (ref - measured) - phi / T
-  double posture_gain = 0.5;            ///< 1/s
-  double posture_time_constant = 1.5;   ///< s
-  double max_body_attitude = 0.1;       ///< rad, |roll|, |pitch|
+  double posture_gain = 0.5;           ///< 1/s
+  double posture_time_constant = 1.5;  ///< s
+  double max_body_attitude = 0.1;      ///< rad, |roll|, |pitch|
 
   // ---- CoM admittance (0 = off): d2(dc)/dt2 = -A (zmp_desired - zmp_measured)
-  double com_admittance = 0.0;          ///< 1/s^2
-  double com_leak_time = 1.0;           ///< s
-  double max_com_offset = 0.05;         ///< m
+  double com_admittance = 0.0;   ///< 1/s^2
+  double com_leak_time = 1.0;    ///< s
+  double max_com_offset = 0.05;  ///< m
 
   // ---- modes and safety
-  double ramp_time = 1.0;        ///< s, ramp-in / ramp-out duration
-  double max_com_error = 0.10;   ///< m, larger horizontal CoM error -> fault + hold
-  double max_torso_tilt = 0.5;   ///< rad, larger measured torso tilt -> fault + hold
-  double max_dt = 0.05;          ///< s, longest tick accepted
+  double ramp_time = 1.0;       ///< s, ramp-in / ramp-out duration
+  double max_com_error = 0.10;  ///< m, larger horizontal CoM error -> fault + hold
+  double max_torso_tilt = 0.5;  ///< rad, larger measured torso tilt -> fault + hold
+  double max_dt = 0.05;         ///< s, longest tick accepted
 };
 
 /// One row of the parameter table: YAML key, field, safety range (inclusive).

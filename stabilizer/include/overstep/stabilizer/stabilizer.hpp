@@ -42,13 +42,13 @@ const char* toString(Fault f);
 
 /// Saturation flags (bitmask in Status::saturation).
 enum Saturation : std::uint32_t {
-  kZmpClamped = 1u << 0,         ///< desired ZMP outside the support polygon
-  kFootRotation = 1u << 1,       ///< a foot rotation hit max_foot_rotation
-  kFootRotationRate = 1u << 2,   ///< a foot rotation rate hit max_foot_rotation_rate
-  kFootHeight = 1u << 3,         ///< the height offset hit max_foot_height
-  kBodyAttitude = 1u << 4,       ///< the posture correction hit max_body_attitude
-  kComOffset = 1u << 5,          ///< the CoM offset hit max_com_offset
-  kNoMeasuredZmp = 1u << 6,      ///< measured normal force too small: ZMP feedback skipped
+  kZmpClamped = 1u << 0,        ///< desired ZMP outside the support polygon
+  kFootRotation = 1u << 1,      ///< a foot rotation hit max_foot_rotation
+  kFootRotationRate = 1u << 2,  ///< a foot rotation rate hit max_foot_rotation_rate
+  kFootHeight = 1u << 3,        ///< the height offset hit max_foot_height
+  kBodyAttitude = 1u << 4,      ///< the posture correction hit max_body_attitude
+  kComOffset = 1u << 5,         ///< the CoM offset hit max_com_offset
+  kNoMeasuredZmp = 1u << 6,     ///< measured normal force too small: ZMP feedback skipped
 };
 
 struct FootReference {
@@ -75,18 +75,18 @@ struct Measurement {
   std::array<core::Vector6d, 2> foot_wrench{{core::Vector6d::Zero(), core::Vector6d::Zero()}};
   std::array<Eigen::Isometry3d, 2> foot_pose{
       {Eigen::Isometry3d::Identity(), Eigen::Isometry3d::Identity()}};  ///< measured soles
-  Eigen::Quaterniond torso = Eigen::Quaterniond::Identity();  ///< IMU orientation (world)
+  Eigen::Quaterniond torso = Eigen::Quaterniond::Identity();            ///< IMU orientation (world)
 };
 
 /// Corrections for the runtime (already scaled by the ramp) and telemetry.
 struct Output {
   Eigen::Vector3d com_offset = Eigen::Vector3d::Zero();  ///< m, world
   std::array<Eigen::Vector2d, 2> foot_rotation{{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()}};
-  std::array<double, 2> foot_height{{0.0, 0.0}};  ///< m, along world z
+  std::array<double, 2> foot_height{{0.0, 0.0}};            ///< m, along world z
   Eigen::Vector2d body_attitude = Eigen::Vector2d::Zero();  ///< rad, torso roll, pitch
 
   // telemetry
-  double ramp = 0.0;  ///< 0..1, feedback scale in use
+  double ramp = 0.0;                                       ///< 0..1, feedback scale in use
   Eigen::Vector2d zmp_desired = Eigen::Vector2d::Zero();   ///< after clamping (world)
   Eigen::Vector2d zmp_measured = Eigen::Vector2d::Zero();  ///< from the foot wrenches
   Eigen::Vector2d com_error = Eigen::Vector2d::Zero();     ///< measured - reference
@@ -135,11 +135,11 @@ class Stabilizer {
   Params params_;
   Reference ref_{};
   Status status_{};
-  double ramp_ = 0.0;  ///< linear ramp parameter 0..1
+  double ramp_ = 0.0;        ///< linear ramp parameter 0..1
   double held_scale_ = 1.0;  ///< output scale while ramping out of a hold
-  Output raw_{};   ///< unscaled controller state/outputs (integrators live here)
-  Output held_{};  ///< frozen output in Hold
-  Output last_{};  ///< last published output
+  Output raw_{};             ///< unscaled controller state/outputs (integrators live here)
+  Output held_{};            ///< frozen output in Hold
+  Output last_{};            ///< last published output
   Eigen::Vector2d dcm_integral_ = Eigen::Vector2d::Zero();
   Eigen::Vector2d com_offset_vel_ = Eigen::Vector2d::Zero();
   bool from_hold_ = false;  ///< ramping out from a frozen output
