@@ -1,0 +1,56 @@
+#pragma once
+/// \file
+/// "Truth" effects: how the simulated robot differs from the model that the planner, runtime and
+/// identification use. Read from a truth YAML (schema and units: docs/truth-file.md) by the
+/// simulator only; nothing the simulator publishes reveals it.
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "overstep/core/wrench.hpp"
+#include "overstep/robots/whole_body_model.hpp"
+
+namespace overstep::sim {
+
+struct Payload {
+  std::string link;
+  double mass = 0.0;                                 ///< kg
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  ///< m, in the link frame
+};
+
+struct FtSensorEffect {
+  core::Vector6d bias = core::Vector6d::Zero();  ///< [F; M] in the sensor frame, N and N m
+  double scale = 1.0;                            ///< measured = scale * true + bias
+};
+
+struct TruthEffects {
+  /// Per elastic joint (model order): stiffness and damping actually simulated.
+  std::vector<double> elastic_stiffness;  ///< N m/rad
+  std::vector<double> elastic_damping;    ///< N m s/rad
+  bool elastic_changed = false;           ///< an ankle entry differs from the model
+  /// Per actuated joint (model order).
+  Eigen::VectorXd viscous;   ///< N m s/rad, joint viscous friction
+  Eigen::VectorXd coulomb;   ///< N m, joint Coulomb friction
+  Eigen::VectorXd backlash;  ///< rad, total dead band between motor and joint
+  std::vector<Payload> payloads;
+  double command_delay = 0.0;          ///< s, pure delay of every command
+  double command_lag = 0.0;            ///< s, first-order lag time constant of the servo references
+  std::array<FtSensorEffect, 2> ft{};  ///< [right, left]
+
+  /// True when nothing differs from the model.
+  bool none() const;
+  /// One line per effect, for logs of the simulator (never published).
+  std::string describe() const;
+};
+
+/// The model's own values: no effect.
+TruthEffects noTruthEffects(const robots::WholeBodyModel& model);
+
+/// Loads a truth YAML against the model. Throws InputError (one line, naming the key) on a
+/// missing or malformed file, an unknown key, joint, group or link, or a negative or non-finite
+/// value (mass, stiffness, damping, friction, delay, lag, backlash) or a non-positive scale.
+TruthEffects loadTruth(const std::string& path, const robots::WholeBodyModel& model);
+
+}  // namespace overstep::sim

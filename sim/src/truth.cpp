@@ -1,0 +1,248 @@
+#include "overstep/sim/truth.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "overstep/core/error.hpp"
+
+namespace overstep::sim {
+namespace {
+
+class Reader {
+ public:
+  explicit Reader(std::string path) : path_(std::move(path)) {}
+
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
+    throw InputError(path_ + ": " + key + ": " + what);
+  }
+
+  void keys(const YAML::Node& map, const std::string& where,
+            std::initializer_list<const char*> allowed) const {
+    if (!map.IsMap()) fail(where, "expected a map");
+    for (const auto& kv : map) {
+      const std::string k = kv.first.as<std::string>();
+      bool ok = false;
+      for (const char* a : allowed) ok = ok || k == a;
+      if (!ok) fail(where.empty() ? k : where + "." + k, "unknown key");
+    }
+  }
+
+  double number(const YAML::Node& n, const std::string& key, double min) const {
+    double v = 0.0;
+    try {
+      v = n.as<double>();
+    } catch (const YAML::Exception&) {
+      fail(key, "expected a number, got '" + n.as<std::string>("?") + "'");
+    }
+    if (!std::isfinite(v) || v < min) {
+      std::ostringstream s;
+      s << "expected a finite value >= " << min << ", got " << v;
+      fail(key, s.str());
+    }
+    return v;
+  }
+
+  double positive(const YAML::Node& n, const std::string& key) const {
+    const double v = number(n, key, 0.0);
+    if (!(v > 0.0)) fail(key, "expected > 0");
+    return v;
+  }
+
+ private:
+  std::string path_;
+};
+
+/// Actuated joint indices named by a group (legs, arms, chest, head, all), a joint name, or a list
+/// of either.
+std::vector<int> jointsOf(const YAML::Node& n, const std::string& key, const Reader& r,
+                          const core::RobotDescription& d) {
+  std::vector<std::string> names;
+  if (n.IsSequence()) {
+    for (const auto& e : n) names.push_back(e.as<std::string>());
+  } else {
+    names.push_back(n.as<std::string>());
+  }
+  std::set<int> out;
+  for (const auto& name : names) {
+    auto match = [&](const std::string& j) {
+      if (name == "all") return true;
+      if (name == "legs") return j.find("LEG_JOINT") != std::string::npos;
+      if (name == "arms") return j.find("ARM_JOINT") != std::string::npos;
+      if (name == "chest") return j.rfind("CHEST_", 0) == 0;
+      if (name == "head") return j.rfind("HEAD_", 0) == 0;
+      return j == name;
+    };
+    bool any = false;
+    for (std::size_t i = 0; i < d.actuated.size(); ++i)
+      if (match(d.actuated[i].name)) out.insert(static_cast<int>(i)), any = true;
+    if (!any)
+      r.fail(key, "unknown joint or group '" + name + "' (groups: legs, arms, chest, head, all)");
+  }
+  return {out.begin(), out.end()};
+}
+
+}  // namespace
+
+bool TruthEffects::none() const {
+  return !elastic_changed && viscous.isZero() && coulomb.isZero() && backlash.isZero() &&
+         payloads.empty() && command_delay == 0.0 && command_lag == 0.0 && ft[0].bias.isZero() &&
+         ft[1].bias.isZero() && ft[0].scale == 1.0 && ft[1].scale == 1.0;
+}
+
+std::string TruthEffects::describe() const {
+  std::ostringstream s;
+  for (std::size_t i = 0; elastic_changed && i < elastic_stiffness.size(); ++i)
+    s << "elastic[" << i << "]: k " << elastic_stiffness[i] << " N m/rad, d " << elastic_damping[i]
+      << " N m s/rad\n";
+  if (!viscous.isZero() || !coulomb.isZero())
+    s << "joint friction: max viscous " << viscous.maxCoeff() << " N m s/rad, max Coulomb "
+      << coulomb.maxCoeff() << " N m\n";
+  if (!backlash.isZero()) s << "backlash: max " << backlash.maxCoeff() << " rad\n";
+  for (const auto& p : payloads)
+    s << "payload: " << p.mass << " kg on " << p.link << " at [" << p.offset.transpose() << "] m\n";
+  if (command_delay > 0.0 || command_lag > 0.0)
+    s << "command: delay " << command_delay << " s, lag " << command_lag << " s\n";
+  for (int f = 0; f < 2; ++f)
+    if (!ft[static_cast<std::size_t>(f)].bias.isZero() ||
+        ft[static_cast<std::size_t>(f)].scale != 1.0)
+      s << (f == 0 ? "right" : "left") << " F/T: scale " << ft[static_cast<std::size_t>(f)].scale
+        << ", bias [" << ft[static_cast<std::size_t>(f)].bias.transpose() << "]\n";
+  return s.str();
+}
+
+TruthEffects noTruthEffects(const robots::WholeBodyModel& model) {
+  const auto& d = model.description();
+  TruthEffects t;
+  for (const auto& e : d.elastic) {
+    t.elastic_stiffness.push_back(e.stiffness);
+    t.elastic_damping.push_back(e.damping);
+  }
+  const auto n = static_cast<Eigen::Index>(d.actuated.size());
+  t.viscous.setZero(n);
+  t.coulomb.setZero(n);
+  t.backlash.setZero(n);
+  return t;
+}
+
+TruthEffects loadTruth(const std::string& path, const robots::WholeBodyModel& model) {
+  const std::string text = core::readFile(path);
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw InputError(path + ": malformed YAML at line " + std::to_string(e.mark.line + 1) + ": " +
+                     e.msg);
+  }
+  const Reader r(path);
+  TruthEffects t = noTruthEffects(model);
+  if (root.IsNull()) return t;
+  const auto& d = model.description();
+  r.keys(root, "", {"ankle", "friction", "payload", "command", "ft_sensor", "backlash"});
+
+  if (const YAML::Node a = root["ankle"]) {
+    if (!a.IsMap())
+      r.fail("ankle", "expected a map from elastic joint name to {stiffness, damping}");
+    for (const auto& kv : a) {
+      const std::string name = kv.first.as<std::string>();
+      const int i = d.elasticIndex(name);
+      if (i < 0) r.fail("ankle." + name, "unknown elastic joint");
+      const std::string key = "ankle." + name;
+      r.keys(kv.second, key, {"stiffness", "damping"});
+      if (kv.second["stiffness"])
+        t.elastic_stiffness[static_cast<std::size_t>(i)] =
+            r.positive(kv.second["stiffness"], key + ".stiffness");
+      if (kv.second["damping"])
+        t.elastic_damping[static_cast<std::size_t>(i)] =
+            r.number(kv.second["damping"], key + ".damping", 0.0);
+      const auto& e = d.elastic[static_cast<std::size_t>(i)];
+      t.elastic_changed = t.elastic_changed ||
+                          t.elastic_stiffness[static_cast<std::size_t>(i)] != e.stiffness ||
+                          t.elastic_damping[static_cast<std::size_t>(i)] != e.damping;
+    }
+  }
+  auto perJoint = [&](const char* section, std::initializer_list<const char*> fields,
+                      auto&& apply) {
+    const YAML::Node s = root[section];
+    if (!s) return;
+    if (!s.IsSequence()) r.fail(section, "expected a list of {joints: ..., ...}");
+    for (std::size_t k = 0; k < s.size(); ++k) {
+      const std::string key = std::string(section) + "[" + std::to_string(k) + "]";
+      std::vector<const char*> allowed(fields);
+      allowed.push_back("joints");
+      if (!s[k].IsMap()) r.fail(key, "expected a map");
+      for (const auto& kv : s[k]) {
+        const std::string f = kv.first.as<std::string>();
+        bool ok = false;
+        for (const char* a : allowed) ok = ok || f == a;
+        if (!ok) r.fail(key + "." + f, "unknown key");
+      }
+      if (!s[k]["joints"]) r.fail(key, "missing 'joints' (a joint, a group or a list)");
+      apply(s[k], key, jointsOf(s[k]["joints"], key + ".joints", r, d));
+    }
+  };
+  perJoint("friction", {"viscous", "coulomb"},
+           [&](const YAML::Node& n, const std::string& key, const std::vector<int>& js) {
+             for (int j : js) {
+               if (n["viscous"]) t.viscous(j) = r.number(n["viscous"], key + ".viscous", 0.0);
+               if (n["coulomb"]) t.coulomb(j) = r.number(n["coulomb"], key + ".coulomb", 0.0);
+             }
+           });
+  perJoint("backlash", {"width"},
+           [&](const YAML::Node& n, const std::string& key, const std::vector<int>& js) {
+             if (!n["width"]) r.fail(key, "missing 'width' (rad)");
+             const double w = r.number(n["width"], key + ".width", 0.0);
+             if (w > 0.1) r.fail(key + ".width", "expected <= 0.1 rad");
+             for (int j : js) t.backlash(j) = w;
+           });
+  if (const YAML::Node p = root["payload"]) {
+    if (!p.IsSequence()) r.fail("payload", "expected a list of {link, mass, offset}");
+    for (std::size_t k = 0; k < p.size(); ++k) {
+      const std::string key = "payload[" + std::to_string(k) + "]";
+      r.keys(p[k], key, {"link", "mass", "offset"});
+      Payload pl;
+      if (!p[k]["link"] || !p[k]["mass"]) r.fail(key, "needs 'link' and 'mass'");
+      pl.link = p[k]["link"].as<std::string>();
+      if (!model.hasFrame(pl.link)) r.fail(key + ".link", "unknown link '" + pl.link + "'");
+      pl.mass = r.positive(p[k]["mass"], key + ".mass");
+      if (const YAML::Node o = p[k]["offset"]) {
+        if (!o.IsSequence() || o.size() != 3) r.fail(key + ".offset", "expected [x, y, z] in m");
+        for (std::size_t i = 0; i < 3; ++i)
+          pl.offset(static_cast<Eigen::Index>(i)) = r.number(o[i], key + ".offset", -1.0);
+        if (pl.offset.cwiseAbs().maxCoeff() > 1.0) r.fail(key + ".offset", "expected |x| <= 1 m");
+      }
+      t.payloads.push_back(pl);
+    }
+  }
+  if (const YAML::Node c = root["command"]) {
+    r.keys(c, "command", {"delay", "lag"});
+    if (c["delay"]) t.command_delay = r.number(c["delay"], "command.delay", 0.0);
+    if (c["lag"]) t.command_lag = r.number(c["lag"], "command.lag", 0.0);
+    if (t.command_delay > 1.0 || t.command_lag > 1.0) r.fail("command", "expected <= 1 s");
+  }
+  if (const YAML::Node f = root["ft_sensor"]) {
+    r.keys(f, "ft_sensor", {"right", "left"});
+    for (int side = 0; side < 2; ++side) {
+      const char* name = side == 0 ? "right" : "left";
+      const YAML::Node s = f[name];
+      if (!s) continue;
+      const std::string key = std::string("ft_sensor.") + name;
+      r.keys(s, key, {"bias", "scale"});
+      auto& e = t.ft[static_cast<std::size_t>(side)];
+      if (s["scale"]) e.scale = r.positive(s["scale"], key + ".scale");
+      if (const YAML::Node b = s["bias"]) {
+        if (!b.IsSequence() || b.size() != 6)
+          r.fail(key + ".bias", "expected [fx, fy, fz, mx, my, mz] (N, N m)");
+        for (std::size_t i = 0; i < 6; ++i)
+          e.bias(static_cast<Eigen::Index>(i)) =
+              r.number(b[i], key + ".bias", -std::numeric_limits<double>::max());
+      }
+    }
+  }
+  return t;
+}
+
+}  // namespace overstep::sim
