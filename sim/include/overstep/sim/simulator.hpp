@@ -1,0 +1,74 @@
+#pragma once
+/// \file
+/// The simulated robot: a DART world (ground + the robot from robots/) stepped at a fixed time
+/// step. Actuated joints are position servos (DART SERVO actuators: desired velocity
+/// Kv (q_ref - q) + qd_ref, torque-limited by the constraint solver, as runtime.md measured
+/// stable at 1 ms); the elastic ankle bushings are passive joints whose spring and damper act as an
+/// explicit torque (DART's implicit spring is too soft under contact and its implicit damping
+/// tipped the robot over; measured, see simulator.cpp). Only the feet
+/// collide with the ground, through DART's own detector (4 contacts per flat foot).
+/// Sensors: encoders, a 6-axis F/T sensor above each bushing, a chest IMU; the true base state
+/// is reported only in the flagged ground-truth fields.
+
+#include <Eigen/Geometry>
+#include <array>
+#include <memory>
+
+#include "overstep/core/robot_io.hpp"
+#include "overstep/robots/whole_body_model.hpp"
+#include "overstep/sim/truth.hpp"
+
+namespace overstep::sim {
+
+struct SimOptions {
+  double dt = 0.001;          ///< s, physics step
+  double servo_gain = 300.0;  ///< 1/s, Kv of the velocity servo (Kv dt <= 1)
+  double ground_friction = 1.0;
+};
+
+/// Ground-truth contact summary of the last step.
+struct ContactInfo {
+  /// [torque; force] on each foot, world frame, about the world origin (ground reaction).
+  std::array<core::Vector6d, 2> foot_wrench{{core::Vector6d::Zero(), core::Vector6d::Zero()}};
+  std::array<bool, 2> foot_contact{{false, false}};
+  int contact_points = 0;
+};
+
+class Simulator {
+ public:
+  /// Builds the world with the robot standing in half-sitting on the ground (feet flat, z = 0).
+  Simulator(const robots::WholeBodyModel& model, const TruthEffects& truth,
+            const SimOptions& options = {});
+  ~Simulator();
+  Simulator(const Simulator&) = delete;
+  Simulator& operator=(const Simulator&) = delete;
+
+  /// Joint references for the servos (actuated joints, model order), held until replaced.
+  void setCommand(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& qd_ref);
+  /// One physics step.
+  void step();
+  double time() const;
+
+  /// Sensor readings now (noise-free; noise is the caller's concern), with ground truth filled.
+  core::RobotState state() const;
+  const ContactInfo& contacts() const { return contacts_; }
+  /// Base (pelvis) pose in the world: ground truth.
+  Eigen::Isometry3d basePose() const;
+  /// Whole-body CoM in the world: ground truth.
+  Eigen::Vector3d com() const;
+  double totalMass() const;
+  /// Mass below each F/T sensor (bushing links and foot), kg.
+  double massBelowSensor(int foot) const;
+  /// Current bushing angles [R roll, R pitch, L roll, L pitch], rad.
+  Eigen::Vector4d elasticPositions() const;
+  /// Ground truth: moment about each bushing axis of the external forces on the bodies below it
+  /// (ground reaction and their weight), N m. In statics it equals stiffness x deflection.
+  Eigen::Vector4d elasticExternalTorque() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  ContactInfo contacts_;
+};
+
+}  // namespace overstep::sim

@@ -1,0 +1,316 @@
+#include "overstep/sim/simulator.hpp"
+
+#include <dart/collision/dart/DARTCollisionDetector.hpp>
+#include <dart/constraint/ConstraintSolver.hpp>
+#include <dart/dynamics/BodyNode.hpp>
+#include <dart/dynamics/BoxShape.hpp>
+#include <dart/dynamics/Joint.hpp>
+#include <dart/dynamics/RevoluteJoint.hpp>
+#include <dart/dynamics/ShapeNode.hpp>
+#include <dart/dynamics/SimpleFrame.hpp>
+#include <dart/dynamics/Skeleton.hpp>
+#include <dart/dynamics/WeldJoint.hpp>
+#include <dart/simulation/World.hpp>
+#include <deque>
+#include <limits>
+
+#include "overstep/core/error.hpp"
+
+namespace overstep::sim {
+
+namespace dd = dart::dynamics;
+
+struct Simulator::Impl {
+  robots::WholeBodyModel model;
+  TruthEffects truth;
+  SimOptions opt;
+  dart::simulation::WorldPtr world;
+  dd::SkeletonPtr robot;
+  std::vector<dd::Joint*> actuated;  // model order
+  std::vector<dd::Joint*> elastic;   // model order
+  std::array<dd::BodyNode*, 2> foot{};
+  std::array<std::vector<dd::BodyNode*>, 2> below_sensor;  // bushing links + foot
+  std::array<dd::SimpleFramePtr, 2> sensor;
+  dd::SimpleFramePtr imu;
+  dd::BodyNode* base = nullptr;
+  Eigen::VectorXd q_ref, qd_ref;  // what the servos track (after delay and lag)
+  std::deque<std::pair<double, std::pair<Eigen::VectorXd, Eigen::VectorXd>>> pending;  // delay
+  Eigen::VectorXd q_cmd, qd_cmd;  // newest command released by the delay line
+
+  explicit Impl(const robots::WholeBodyModel& m) : model(m) {}
+};
+
+Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& truth,
+                     const SimOptions& options)
+    : impl_(std::make_unique<Impl>(model)) {
+  Impl& s = *impl_;
+  s.truth = truth;
+  s.opt = options;
+  if (!(options.dt > 0.0 && options.dt <= 0.005))
+    throw InputError("sim: time step: expected 0 < dt <= 0.005 s");
+  if (!(options.servo_gain > 0.0 && options.servo_gain * options.dt <= 1.0))
+    throw InputError("sim: servo gain: expected 0 < Kv dt <= 1");
+  const auto& d = s.model.description();
+  if (truth.viscous.size() != static_cast<Eigen::Index>(s.model.actuatedCount()) ||
+      truth.elastic_stiffness.size() != d.elastic.size())
+    throw InputError("sim: truth effects were made for another robot");
+
+  // The robot in half-sitting, soles on z = 0.
+  const Eigen::VectorXd q0 = s.model.halfSitting();
+  s.model.setPositions(q0);
+  s.robot = s.model.skeleton()->cloneSkeleton("robot");
+  s.robot->setPositions(s.model.skeleton()->getPositions());
+  s.robot->setVelocities(Eigen::VectorXd::Zero(s.robot->getNumDofs()));
+
+  // Payloads: mass and inertia merged into the link (point masses at an offset).
+  for (const auto& p : truth.payloads) {
+    dd::BodyNode* bn = s.robot->getBodyNode(p.link);
+    if (!bn) throw InputError("sim: payload link '" + p.link + "' is not a body of the robot");
+    dd::Inertia I = bn->getInertia();
+    const double m0 = I.getMass(), m1 = m0 + p.mass;
+    const Eigen::Vector3d c0 = I.getLocalCOM(), c1 = (m0 * c0 + p.mass * p.offset) / m1;
+    auto shifted = [](const Eigen::Vector3d& r) {
+      return (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose()).eval();
+    };
+    const Eigen::Matrix3d J =
+        I.getMoment() + m0 * shifted(c0 - c1) + p.mass * shifted(p.offset - c1);
+    bn->setInertia(dd::Inertia(m1, c1, J));
+  }
+
+  for (int j = 0; j < s.model.actuatedCount(); ++j) {
+    dd::DegreeOfFreedom* dof =
+        s.robot->getDof(static_cast<std::size_t>(s.model.dartIndex(s.model.actuatedCoordinate(j))));
+    dd::Joint* jt = dof->getJoint();
+    jt->setActuatorType(dd::Joint::SERVO);
+    const double lim = d.actuated[static_cast<std::size_t>(j)].torque;
+    jt->setForceLowerLimit(0, -lim);
+    jt->setForceUpperLimit(0, lim);
+    s.actuated.push_back(jt);
+  }
+  for (std::size_t e = 0; e < d.elastic.size(); ++e) {
+    dd::DegreeOfFreedom* dof = s.robot->getDof(static_cast<std::size_t>(
+        s.model.dartIndex(s.model.elasticCoordinate(static_cast<int>(e)))));
+    dd::Joint* jt = dof->getJoint();
+    // Spring and damper as an explicit joint torque each step: DART's implicit joint spring is
+    // implicit only in the free step, not in the contact-impulse step, so under contact the
+    // bushing came out 26 % soft (static deflection 13.9 mrad where moment / stiffness gives
+    // 10.3; measured), and implicit damping tipped the standing robot over (as runtime.md warns).
+    jt->setActuatorType(dd::Joint::FORCE);
+    // The URDF gives passive joints effort 0, which DART turns into force limits of 0.
+    jt->setForceLowerLimit(0, -std::numeric_limits<double>::infinity());
+    jt->setForceUpperLimit(0, std::numeric_limits<double>::infinity());
+    jt->setSpringStiffness(0, 0.0);  // spring applied explicitly each step
+    jt->setRestPosition(0, 0.0);
+    jt->setDampingCoefficient(0, 0.0);  // damping applied explicitly too
+    s.elastic.push_back(jt);
+  }
+
+  // Feet, sensors, IMU.
+  for (int f = 0; f < 2; ++f) {
+    const core::FootDescription* fd = d.foot(f == 0 ? "right" : "left");
+    if (!fd) throw InputError("sim: the robot needs a right and a left foot");
+    s.foot[static_cast<std::size_t>(f)] = s.robot->getBodyNode(fd->link);
+    // The sensor frame's link and offset from the YAML.
+    for (const auto& fr : d.frames) {
+      if (fr.name != fd->force_sensor_frame) continue;
+      dd::BodyNode* parent = s.robot->getBodyNode(fr.link);
+      s.sensor[static_cast<std::size_t>(f)] =
+          std::make_shared<dd::SimpleFrame>(parent, fd->force_sensor_frame, fr.X_LF);
+      // Bodies below the sensor: the descendants of the sensor's link.
+      std::vector<dd::BodyNode*> stack{parent};
+      while (!stack.empty()) {
+        dd::BodyNode* b = stack.back();
+        stack.pop_back();
+        for (std::size_t c = 0; c < b->getNumChildBodyNodes(); ++c) {
+          s.below_sensor[static_cast<std::size_t>(f)].push_back(b->getChildBodyNode(c));
+          stack.push_back(b->getChildBodyNode(c));
+        }
+      }
+    }
+    if (!s.sensor[static_cast<std::size_t>(f)])
+      throw InputError("sim: force sensor frame '" + fd->force_sensor_frame + "' not found");
+  }
+  for (const auto& fr : d.frames)
+    if (fr.name == "imu")
+      s.imu = std::make_shared<dd::SimpleFrame>(s.robot->getBodyNode(fr.link), "imu", fr.X_LF);
+  if (!s.imu) throw InputError("sim: the robot YAML has no 'imu' frame");
+  s.base = s.robot->getBodyNode(d.base_link);
+
+  // Only the feet collide (with the ground).
+  for (std::size_t b = 0; b < s.robot->getNumBodyNodes(); ++b) {
+    dd::BodyNode* bn = s.robot->getBodyNode(b);
+    const bool is_foot = bn == s.foot[0] || bn == s.foot[1];
+    for (std::size_t k = 0; k < bn->getNumShapeNodes(); ++k) {
+      dd::ShapeNode* sn = bn->getShapeNode(k);
+      if (!is_foot && sn->has<dd::CollisionAspect>()) sn->removeCollisionAspect();
+      if (is_foot && sn->has<dd::DynamicsAspect>())
+        sn->getDynamicsAspect()->setFrictionCoeff(options.ground_friction);
+    }
+  }
+  auto ground = dd::Skeleton::create("ground");
+  auto gb = ground->createJointAndBodyNodePair<dd::WeldJoint>().second;
+  auto box = std::make_shared<dd::BoxShape>(Eigen::Vector3d(20.0, 20.0, 0.2));
+  auto* gs = gb->createShapeNodeWith<dd::CollisionAspect, dd::DynamicsAspect>(box);
+  gs->setRelativeTranslation(Eigen::Vector3d(0.0, 0.0, -0.1));
+  gs->getDynamicsAspect()->setFrictionCoeff(options.ground_friction);
+
+  s.world = dart::simulation::World::create("overstep");
+  s.world->setTimeStep(options.dt);
+  s.world->setGravity(Eigen::Vector3d(0.0, 0.0, -d.gravity));
+  s.world->getConstraintSolver()->setCollisionDetector(
+      dart::collision::DARTCollisionDetector::create());
+  s.world->addSkeleton(ground);
+  s.world->addSkeleton(s.robot);
+
+  const int na = s.model.actuatedCount();
+  s.q_ref.resize(na);
+  for (int j = 0; j < na; ++j) s.q_ref(j) = s.actuated[static_cast<std::size_t>(j)]->getPosition(0);
+  s.qd_ref.setZero(na);
+  s.q_cmd = s.q_ref;
+  s.qd_cmd = s.qd_ref;
+}
+
+Simulator::~Simulator() = default;
+
+void Simulator::setCommand(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& qd_ref) {
+  Impl& s = *impl_;
+  s.pending.emplace_back(time() + s.truth.command_delay, std::make_pair(q_ref, qd_ref));
+}
+
+double Simulator::time() const { return impl_->world->getTime(); }
+
+void Simulator::step() {
+  Impl& s = *impl_;
+  const double dt = s.opt.dt;
+  // Command delay line, then first-order lag of the references.
+  while (!s.pending.empty() && s.pending.front().first <= time() + 1e-12) {
+    s.q_cmd = s.pending.front().second.first;
+    s.qd_cmd = s.pending.front().second.second;
+    s.pending.pop_front();
+  }
+  if (s.truth.command_lag > 0.0) {
+    const double a = dt / (s.truth.command_lag + dt);
+    s.q_ref += a * (s.q_cmd - s.q_ref);
+    s.qd_ref += a * (s.qd_cmd - s.qd_ref);
+  } else {
+    s.q_ref = s.q_cmd;
+    s.qd_ref = s.qd_cmd;
+  }
+  for (std::size_t j = 0; j < s.actuated.size(); ++j) {
+    dd::Joint* jt = s.actuated[j];
+    const auto i = static_cast<Eigen::Index>(j);
+    jt->setCommand(0, s.opt.servo_gain * (s.q_ref(i) - jt->getPosition(0)) + s.qd_ref(i));
+  }
+  for (std::size_t e = 0; e < s.elastic.size(); ++e)
+    s.elastic[e]->setCommand(0, -s.truth.elastic_stiffness[e] * s.elastic[e]->getPosition(0) -
+                                    s.truth.elastic_damping[e] * s.elastic[e]->getVelocity(0));
+  s.world->step();
+
+  // Ground reaction on each foot from its constraint impulse (only contacts act on the feet).
+  contacts_ = ContactInfo{};
+  for (int f = 0; f < 2; ++f) {
+    dd::BodyNode* bn = s.foot[static_cast<std::size_t>(f)];
+    const Eigen::Vector6d imp = bn->getConstraintImpulse() / dt;  // [angular; linear], body frame
+    const Eigen::Isometry3d X = bn->getWorldTransform();
+    core::Vector6d w_body;
+    w_body << imp.head<3>(), imp.tail<3>();
+    contacts_.foot_wrench[static_cast<std::size_t>(f)] = core::transformWrench(X, w_body);
+    contacts_.foot_contact[static_cast<std::size_t>(f)] = w_body.tail<3>().norm() > 1e-6;
+  }
+  contacts_.contact_points = static_cast<int>(s.world->getLastCollisionResult().getNumContacts());
+}
+
+double Simulator::totalMass() const { return impl_->robot->getMass(); }
+
+double Simulator::massBelowSensor(int foot) const {
+  double m = 0.0;
+  for (auto* b : impl_->below_sensor[static_cast<std::size_t>(foot)]) m += b->getMass();
+  return m;
+}
+
+Eigen::Isometry3d Simulator::basePose() const { return impl_->base->getWorldTransform(); }
+
+Eigen::Vector3d Simulator::com() const { return impl_->robot->getCOM(); }
+
+Eigen::Vector4d Simulator::elasticPositions() const {
+  Eigen::Vector4d q;
+  for (int e = 0; e < 4; ++e) q(e) = impl_->elastic[static_cast<std::size_t>(e)]->getPosition(0);
+  return q;
+}
+
+Eigen::Vector4d Simulator::elasticExternalTorque() const {
+  const Impl& s = *impl_;
+  const Eigen::Vector3d g(0.0, 0.0, -s.model.description().gravity);
+  Eigen::Vector4d out;
+  for (int e = 0; e < 4; ++e) {
+    const auto* jt = dynamic_cast<const dd::RevoluteJoint*>(s.elastic[static_cast<std::size_t>(e)]);
+    const dd::BodyNode* child = jt->getChildBodyNode();
+    const Eigen::Isometry3d Xj = child->getWorldTransform() * jt->getTransformFromChildBodyNode();
+    const Eigen::Vector3d axis = Xj.linear() * jt->getAxis(), o = Xj.translation();
+    const int f = e / 2;
+    Eigen::Vector3d m = core::shiftWrench(contacts_.foot_wrench[static_cast<std::size_t>(f)],
+                                          Eigen::Vector3d::Zero(), o)
+                            .head<3>();
+    std::vector<const dd::BodyNode*> stack{child};  // the bodies below this joint
+    while (!stack.empty()) {
+      const dd::BodyNode* b = stack.back();
+      stack.pop_back();
+      m += (b->getCOM() - o).cross(b->getMass() * g);
+      for (std::size_t c = 0; c < b->getNumChildBodyNodes(); ++c)
+        stack.push_back(b->getChildBodyNode(c));
+    }
+    out(e) = axis.dot(m);
+  }
+  return out;
+}
+
+core::RobotState Simulator::state() const {
+  const Impl& s = *impl_;
+  core::RobotState st;
+  const int na = s.model.actuatedCount();
+  st.resize(na);
+  st.utime = static_cast<std::int64_t>(std::llround(time() * 1e6));
+  for (int j = 0; j < na; ++j) {
+    const dd::Joint* jt = s.actuated[static_cast<std::size_t>(j)];
+    st.q(j) = jt->getPosition(0);
+    st.qd(j) = jt->getVelocity(0);
+    st.tau(j) = jt->getConstraintImpulse(0) / s.opt.dt;
+  }
+  const Eigen::Vector3d g(0.0, 0.0, -s.model.description().gravity);
+  for (int f = 0; f < 2; ++f) {
+    // What the foot side transmits to the leg through the sensor, by Newton-Euler on the bodies
+    // below it: ground reaction + their weight - their momentum rate, about the sensor origin.
+    const Eigen::Vector3d o =
+        s.sensor[static_cast<std::size_t>(f)]->getWorldTransform().translation();
+    core::Vector6d w = core::shiftWrench(contacts_.foot_wrench[static_cast<std::size_t>(f)],
+                                         Eigen::Vector3d::Zero(), o);
+    for (const dd::BodyNode* b : s.below_sensor[static_cast<std::size_t>(f)]) {
+      const double m = b->getMass();
+      const Eigen::Vector3d c = b->getCOM();
+      const Eigen::Matrix3d R = b->getWorldTransform().linear();
+      const Eigen::Matrix3d Iw = R * b->getInertia().getMoment() * R.transpose();
+      const Eigen::Vector3d om = b->getAngularVelocity(), al = b->getAngularAcceleration();
+      const Eigen::Vector3d force = m * (g - b->getCOMLinearAcceleration());
+      const Eigen::Vector3d torque_c = -(Iw * al + om.cross(Iw * om));
+      w.head<3>() += torque_c + (c - o).cross(force);
+      w.tail<3>() += force;
+    }
+    const Eigen::Matrix3d Rs = s.sensor[static_cast<std::size_t>(f)]->getWorldTransform().linear();
+    core::Vector6d fm;  // [F; M] in the sensor frame (core::RobotState's order)
+    fm << Rs.transpose() * w.tail<3>(), Rs.transpose() * w.head<3>();
+    const auto& fx = s.truth.ft[static_cast<std::size_t>(f)];
+    fm = fx.scale * fm + fx.bias;
+    (f == 0 ? st.ft_right : st.ft_left) = fm;
+  }
+  const Eigen::Isometry3d Xi = s.imu->getWorldTransform();
+  st.imu_orientation = Eigen::Quaterniond(Xi.linear());
+  st.imu_angular_velocity = Xi.linear().transpose() * s.imu->getAngularVelocity();
+  st.imu_linear_acceleration = Xi.linear().transpose() * (s.imu->getLinearAcceleration() - g);
+  st.has_ground_truth = true;
+  st.base_pose = s.base->getWorldTransform();
+  st.base_linear_velocity = s.base->getLinearVelocity();
+  st.base_angular_velocity = s.base->getAngularVelocity();
+  return st;
+}
+
+}  // namespace overstep::sim

@@ -1,0 +1,112 @@
+// The simulated robot standing: physics invariants of the DART world with servoed joints and
+// elastic ankle bushings.
+#include <gtest/gtest.h>
+
+#include "overstep/core/error.hpp"
+#include "overstep/core/wrench.hpp"
+#include "overstep/sim/simulator.hpp"
+#include "test_util.hpp"
+
+namespace {
+
+const overstep::robots::WholeBodyModel& model() {
+  static const auto m = overstep::robots::WholeBodyModel::fromFile(overstep::test::hrp2Yaml());
+  return m;
+}
+
+}  // namespace
+
+TEST(Sim, StandsTenSecondsInHalfSittingWithStaticsHolding) {
+  overstep::sim::Simulator sim(model(), overstep::sim::noTruthEffects(model()));
+  const double g = model().description().gravity;
+  const double z0 = sim.basePose().translation().z();
+  const auto st0 = sim.state();
+  overstep::core::Vector6d sum_late = overstep::core::Vector6d::Zero();
+  int n_late = 0;
+  for (int i = 0; i < 10000; ++i) {  // 10 s at 1 ms, commands held at the initial posture
+    if (i % 5 == 0) sim.setCommand(st0.q, Eigen::VectorXd::Zero(st0.q.size()));
+    sim.step();
+    ASSERT_GT(sim.basePose().translation().z(), z0 - 0.02) << "fell at t = " << sim.time();
+    if (i >= 9000) {
+      sum_late += sim.contacts().foot_wrench[0] + sim.contacts().foot_wrench[1];
+      ++n_late;
+    }
+  }
+  EXPECT_NEAR(sim.time(), 10.0, 1e-9);
+  const overstep::core::Vector6d W = sum_late / n_late;
+  const double weight = sim.totalMass() * g;
+  EXPECT_NEAR(W(5), weight, 0.01 * weight) << "ground reaction = weight";
+  EXPECT_TRUE(sim.contacts().foot_contact[0] && sim.contacts().foot_contact[1]);
+  // CoP where statics puts it: under the CoM.
+  const Eigen::Vector2d zmp = overstep::core::zmpFromWrench(W);
+  EXPECT_LT((zmp - sim.com().head<2>()).norm(), 0.005);
+  // The F/T sensors carry the weight minus what hangs below them.
+  const auto st = sim.state();
+  const double expected = (sim.totalMass() - sim.massBelowSensor(0) - sim.massBelowSensor(1)) * g;
+  EXPECT_NEAR(st.ft_right(2) + st.ft_left(2), expected, 0.01 * expected);
+  // Each bushing's deflection equals the moment about its axis divided by its stiffness.
+  const Eigen::Vector4d q = sim.elasticPositions(), tau = sim.elasticExternalTorque();
+  for (int e = 0; e < 4; ++e) {
+    const double k = model().description().elastic[static_cast<std::size_t>(e)].stiffness;
+    EXPECT_NEAR(q(e), tau(e) / k, 2e-4 + 0.02 * std::abs(tau(e) / k)) << "bushing " << e;
+  }
+  // The posture is held: joints track their references.
+  EXPECT_LT((st.q - st0.q).cwiseAbs().maxCoeff(), 1e-3);
+  EXPECT_TRUE(st.has_ground_truth);
+}
+
+TEST(Sim, BadOptionsAreRefused) {
+  overstep::sim::SimOptions o;
+  o.servo_gain = 2000.0;  // Kv dt > 1
+  EXPECT_THROW(overstep::sim::Simulator(model(), overstep::sim::noTruthEffects(model()), o),
+               overstep::InputError);
+}
+
+namespace {
+
+/// Runs `seconds` holding the initial posture; returns the time-averaged ground reaction over the
+/// last half second.
+overstep::core::Vector6d holdAndMeasure(overstep::sim::Simulator& sim, double seconds) {
+  const auto st0 = sim.state();
+  overstep::core::Vector6d sum = overstep::core::Vector6d::Zero();
+  int n = 0;
+  const int steps = static_cast<int>(seconds / 0.001);
+  for (int i = 0; i < steps; ++i) {
+    if (i % 5 == 0) sim.setCommand(st0.q, Eigen::VectorXd::Zero(st0.q.size()));
+    sim.step();
+    if (i >= steps - 500) {
+      sum += sim.contacts().foot_wrench[0] + sim.contacts().foot_wrench[1];
+      ++n;
+    }
+  }
+  return sum / n;
+}
+
+}  // namespace
+
+TEST(SimTruth, PayloadAddsItsWeightAndMomentAndBiasIsAConstantOffset) {
+  auto clean = overstep::sim::noTruthEffects(model());
+  auto loaded = clean;
+  loaded.payloads.push_back({"CHEST_LINK1", 3.0, Eigen::Vector3d(0.05, 0.0, 0.1)});
+  loaded.ft[1].bias << 1.0, -2.0, 3.0, 0.1, -0.2, 0.3;
+  overstep::sim::Simulator a(model(), clean), b(model(), loaded);
+  const double g = model().description().gravity;
+  const auto Wa = holdAndMeasure(a, 3.0), Wb = holdAndMeasure(b, 3.0);
+  EXPECT_NEAR(b.totalMass() - a.totalMass(), 3.0, 1e-12);
+  EXPECT_NEAR(Wb(5) - Wa(5), 3.0 * g, 0.01 * 3.0 * g) << "+m g on the summed normal force";
+  // The matching moment: the support moment about the world origin follows the new CoM.
+  const Eigen::Vector2d za = overstep::core::zmpFromWrench(Wa),
+                        zb = overstep::core::zmpFromWrench(Wb);
+  EXPECT_LT((za - a.com().head<2>()).norm(), 0.002);
+  EXPECT_LT((zb - b.com().head<2>()).norm(), 0.002);
+  EXPECT_GT(b.com().x() - a.com().x(), 0.001) << "a payload 5 cm ahead of the chest moves the CoM";
+  // Bias: the left sensor reads the clean reading of the same state plus the bias. Same robot,
+  // same state: compare the bias-free right sensor as a control.
+  auto loaded_no_bias = loaded;
+  loaded_no_bias.ft[1].bias.setZero();
+  overstep::sim::Simulator c(model(), loaded_no_bias);
+  holdAndMeasure(c, 3.0);
+  const auto sb = b.state(), sc = c.state();
+  EXPECT_LT((sb.ft_left - sc.ft_left - loaded.ft[1].bias).norm(), 1e-9);
+  EXPECT_LT((sb.ft_right - sc.ft_right).norm(), 1e-9) << "lockstep runs are bit-identical";
+}
