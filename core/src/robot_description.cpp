@@ -9,95 +9,14 @@
 #include <sstream>
 
 #include "overstep/core/error.hpp"
+#include "overstep/core/yaml_reader.hpp"
 
 namespace overstep::core {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-class Reader {
- public:
-  explicit Reader(std::string file) : file_(std::move(file)) {}
-
-  [[noreturn]] void fail(const std::string& key, const std::string& msg) const {
-    throw InputError(file_ + ": " + key + ": " + msg);
-  }
-
-  YAML::Node need(const YAML::Node& node, const std::string& name, const std::string& where) const {
-    YAML::Node child = node[name];
-    if (!child) fail(where.empty() ? name : where + "." + name, "missing key");
-    return child;
-  }
-
-  template <typename T>
-  T as(const YAML::Node& node, const std::string& key) const {
-    try {
-      return node.as<T>();
-    } catch (const YAML::Exception&) {
-      fail(key, "expected a " + typeName<T>() + ", got '" + scalarText(node) + "'");
-    }
-  }
-
-  double number(const YAML::Node& parent, const std::string& name, const std::string& where) const {
-    const std::string key = where.empty() ? name : where + "." + name;
-    const double v = as<double>(need(parent, name, where), key);
-    if (!std::isfinite(v)) fail(key, "expected a finite number, got " + std::to_string(v));
-    return v;
-  }
-
-  double numberOr(const YAML::Node& parent, const std::string& name, const std::string& where,
-                  double fallback) const {
-    return parent[name] ? number(parent, name, where) : fallback;
-  }
-
-  double nonNegative(const YAML::Node& parent, const std::string& name,
-                     const std::string& where) const {
-    const double v = number(parent, name, where);
-    if (v < 0.0) fail(where + "." + name, "expected >= 0, got " + fmt(v));
-    return v;
-  }
-
-  double positive(const YAML::Node& parent, const std::string& name,
-                  const std::string& where) const {
-    const double v = number(parent, name, where);
-    if (!(v > 0.0)) fail(where + "." + name, "expected > 0, got " + fmt(v));
-    return v;
-  }
-
-  Eigen::Vector3d vec3(const YAML::Node& parent, const std::string& name,
-                       const std::string& where) const {
-    const std::string key = where + "." + name;
-    YAML::Node n = need(parent, name, where);
-    if (!n.IsSequence() || n.size() != 3) fail(key, "expected a list of 3 numbers");
-    Eigen::Vector3d v;
-    for (int i = 0; i < 3; ++i) {
-      v(i) = as<double>(n[i], key);
-      if (!std::isfinite(v(i))) fail(key, "expected finite numbers");
-    }
-    return v;
-  }
-
-  static std::string fmt(double v) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%g", v);
-    return buf;
-  }
-
- private:
-  template <typename T>
-  static std::string typeName() {
-    if constexpr (std::is_same_v<T, double>) return "number";
-    if constexpr (std::is_same_v<T, bool>) return "boolean";
-    return "string";
-  }
-  static std::string scalarText(const YAML::Node& n) {
-    if (n.IsScalar()) return n.Scalar();
-    if (n.IsSequence()) return "<list>";
-    if (n.IsMap()) return "<map>";
-    return "<null>";
-  }
-  std::string file_;
-};
+using Reader = YamlReader;
 
 }  // namespace
 

@@ -8,39 +8,22 @@
 
 #include "overstep/core/error.hpp"
 #include "overstep/core/robot_description.hpp"
+#include "overstep/core/yaml_reader.hpp"
 
 namespace overstep::planner {
 namespace {
 
-class ConfigReader {
+/// The shared YAML reader plus per-phase lists.
+class ConfigReader : public core::YamlReader {
  public:
-  explicit ConfigReader(std::string file) : file_(std::move(file)) {}
-  [[noreturn]] void fail(const std::string& key, const std::string& msg) const {
-    throw InputError(file_ + ": " + key + ": " + msg);
-  }
-  double number(const YAML::Node& n, const std::string& key) const {
-    double v = 0.0;
-    try {
-      v = n.as<double>();
-    } catch (const YAML::Exception&) {
-      fail(key,
-           "expected a number, got '" + (n.IsScalar() ? n.Scalar() : std::string("<node>")) + "'");
-    }
-    if (!std::isfinite(v)) fail(key, "expected a finite number");
-    return v;
-  }
-  double positive(const YAML::Node& n, const std::string& key) const {
-    const double v = number(n, key);
-    if (!(v > 0.0)) fail(key, "expected > 0, got " + std::to_string(v));
-    return v;
-  }
+  using core::YamlReader::YamlReader;
   template <typename T>
   std::array<T, kPhaseCount> perPhase(const YAML::Node& n, const std::string& key) const {
     if (!n.IsSequence() || n.size() != kPhaseCount)
       fail(key, "expected a list of " + std::to_string(kPhaseCount) + " values (one per phase)");
     std::array<T, kPhaseCount> out{};
     for (int i = 0; i < kPhaseCount; ++i) {
-      const double v = positive(n[i], key);
+      const double v = positiveValue(n[i], key);
       if constexpr (std::is_same_v<T, int>) {
         if (v != std::floor(v)) fail(key, "expected whole numbers");
         out[static_cast<std::size_t>(i)] = static_cast<int>(v);
@@ -50,9 +33,6 @@ class ConfigReader {
     }
     return out;
   }
-
- private:
-  std::string file_;
 };
 
 }  // namespace
@@ -162,7 +142,7 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
     const std::string key = kv.first.as<std::string>();
     const YAML::Node& v = kv.second;
     if (scalars.count(key)) {
-      *fields.at(key) = key == "head_pitch_offset" ? r.number(v, key) : r.positive(v, key);
+      *fields.at(key) = key == "head_pitch_offset" ? r.value(v, key) : r.positiveValue(v, key);
     } else if (key == "samples_per_phase") {
       c.samples_per_phase = r.perPhase<int>(v, key);
     } else if (key == "spline_intervals") {
@@ -176,13 +156,14 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
     } else if (key == "cop_homotopy") {
       if (!v.IsSequence()) r.fail(key, "expected a list of box sizes");
       c.cop_homotopy.clear();
-      for (std::size_t i = 0; i < v.size(); ++i) c.cop_homotopy.push_back(r.positive(v[i], key));
+      for (std::size_t i = 0; i < v.size(); ++i)
+        c.cop_homotopy.push_back(r.positiveValue(v[i], key));
     } else if (key == "weights") {
       if (!v.IsMap()) r.fail(key, "expected a map of term -> weight");
       for (const auto& w : v) {
         const std::string name = w.first.as<std::string>();
         if (!c.weights.count(name)) r.fail("weights." + name, "unknown objective term");
-        const double x = r.number(w.second, "weights." + name);
+        const double x = r.value(w.second, "weights." + name);
         if (x < 0.0) r.fail("weights." + name, "expected >= 0");
         c.weights[name] = x;
       }
@@ -194,20 +175,20 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
         if (name == "algorithm") {
           c.solver.algorithm = s.second.as<std::string>();
         } else if (name == "max_iterations") {
-          c.solver.max_iterations = static_cast<int>(r.positive(s.second, k));
+          c.solver.max_iterations = static_cast<int>(r.positiveValue(s.second, k));
         } else if (name == "constraint_tolerance") {
-          c.solver.constraint_tolerance = r.positive(s.second, k);
+          c.solver.constraint_tolerance = r.positiveValue(s.second, k);
         } else if (name == "ftol_rel") {
-          c.solver.ftol_rel = r.positive(s.second, k);
+          c.solver.ftol_rel = r.positiveValue(s.second, k);
         } else if (name == "time_limit") {
-          c.solver.time_limit = r.positive(s.second, k);
+          c.solver.time_limit = r.positiveValue(s.second, k);
         } else if (name == "threads") {
-          c.solver.threads = static_cast<int>(r.positive(s.second, k));
+          c.solver.threads = static_cast<int>(r.positiveValue(s.second, k));
         } else if (name == "trust_radius") {
-          c.solver.trust_radius = r.number(s.second, k);
+          c.solver.trust_radius = r.value(s.second, k);
           if (c.solver.trust_radius < 0.0) r.fail(k, "expected >= 0 (0: off)");
         } else if (name == "round_iterations") {
-          c.solver.round_iterations = static_cast<int>(r.positive(s.second, k));
+          c.solver.round_iterations = static_cast<int>(r.positiveValue(s.second, k));
         } else {
           r.fail(k, "unknown key");
         }

@@ -8,53 +8,12 @@
 #include <sstream>
 
 #include "overstep/core/error.hpp"
+#include "overstep/core/yaml_reader.hpp"
 
 namespace overstep::sim {
 namespace {
 
-class Reader {
- public:
-  explicit Reader(std::string path) : path_(std::move(path)) {}
-
-  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
-    throw InputError(path_ + ": " + key + ": " + what);
-  }
-
-  void keys(const YAML::Node& map, const std::string& where,
-            std::initializer_list<const char*> allowed) const {
-    if (!map.IsMap()) fail(where, "expected a map");
-    for (const auto& kv : map) {
-      const std::string k = kv.first.as<std::string>();
-      bool ok = false;
-      for (const char* a : allowed) ok = ok || k == a;
-      if (!ok) fail(where.empty() ? k : where + "." + k, "unknown key");
-    }
-  }
-
-  double number(const YAML::Node& n, const std::string& key, double min) const {
-    double v = 0.0;
-    try {
-      v = n.as<double>();
-    } catch (const YAML::Exception&) {
-      fail(key, "expected a number, got '" + n.as<std::string>("?") + "'");
-    }
-    if (!std::isfinite(v) || v < min) {
-      std::ostringstream s;
-      s << "expected a finite value >= " << min << ", got " << v;
-      fail(key, s.str());
-    }
-    return v;
-  }
-
-  double positive(const YAML::Node& n, const std::string& key) const {
-    const double v = number(n, key, 0.0);
-    if (!(v > 0.0)) fail(key, "expected > 0");
-    return v;
-  }
-
- private:
-  std::string path_;
-};
+using Reader = core::YamlReader;
 
 /// Actuated joint indices named by a group (legs, arms, chest, head, all), a joint name, or a list
 /// of either.
@@ -141,7 +100,7 @@ TruthEffects loadTruth(const std::string& path, const robots::WholeBodyModel& mo
   TruthEffects t = noTruthEffects(model);
   if (root.IsNull()) return t;
   const auto& d = model.description();
-  r.keys(root, "", {"ankle", "friction", "payload", "command", "ft_sensor", "backlash"});
+  r.onlyKeys(root, "", {"ankle", "friction", "payload", "command", "ft_sensor", "backlash"});
 
   if (const YAML::Node a = root["ankle"]) {
     if (!a.IsMap())
@@ -151,50 +110,43 @@ TruthEffects loadTruth(const std::string& path, const robots::WholeBodyModel& mo
       const int i = d.elasticIndex(name);
       if (i < 0) r.fail("ankle." + name, "unknown elastic joint");
       const std::string key = "ankle." + name;
-      r.keys(kv.second, key, {"stiffness", "damping"});
+      r.onlyKeys(kv.second, key, {"stiffness", "damping"});
       if (kv.second["stiffness"])
         t.elastic_stiffness[static_cast<std::size_t>(i)] =
-            r.positive(kv.second["stiffness"], key + ".stiffness");
+            r.positiveValue(kv.second["stiffness"], key + ".stiffness");
       if (kv.second["damping"])
         t.elastic_damping[static_cast<std::size_t>(i)] =
-            r.number(kv.second["damping"], key + ".damping", 0.0);
+            r.valueAtLeast(kv.second["damping"], key + ".damping", 0.0);
       const auto& e = d.elastic[static_cast<std::size_t>(i)];
       t.elastic_changed = t.elastic_changed ||
                           t.elastic_stiffness[static_cast<std::size_t>(i)] != e.stiffness ||
                           t.elastic_damping[static_cast<std::size_t>(i)] != e.damping;
     }
   }
-  auto perJoint = [&](const char* section, std::initializer_list<const char*> fields,
+  // A list of {joints: <joint, group or list>, <fields>}; `allowed` includes "joints".
+  auto perJoint = [&](const char* section, std::initializer_list<const char*> allowed,
                       auto&& apply) {
     const YAML::Node s = root[section];
     if (!s) return;
     if (!s.IsSequence()) r.fail(section, "expected a list of {joints: ..., ...}");
     for (std::size_t k = 0; k < s.size(); ++k) {
       const std::string key = std::string(section) + "[" + std::to_string(k) + "]";
-      std::vector<const char*> allowed(fields);
-      allowed.push_back("joints");
-      if (!s[k].IsMap()) r.fail(key, "expected a map");
-      for (const auto& kv : s[k]) {
-        const std::string f = kv.first.as<std::string>();
-        bool ok = false;
-        for (const char* a : allowed) ok = ok || f == a;
-        if (!ok) r.fail(key + "." + f, "unknown key");
-      }
+      r.onlyKeys(s[k], key, allowed);
       if (!s[k]["joints"]) r.fail(key, "missing 'joints' (a joint, a group or a list)");
       apply(s[k], key, jointsOf(s[k]["joints"], key + ".joints", r, d));
     }
   };
-  perJoint("friction", {"viscous", "coulomb"},
+  perJoint("friction", {"joints", "viscous", "coulomb"},
            [&](const YAML::Node& n, const std::string& key, const std::vector<int>& js) {
              for (int j : js) {
-               if (n["viscous"]) t.viscous(j) = r.number(n["viscous"], key + ".viscous", 0.0);
-               if (n["coulomb"]) t.coulomb(j) = r.number(n["coulomb"], key + ".coulomb", 0.0);
+               if (n["viscous"]) t.viscous(j) = r.valueAtLeast(n["viscous"], key + ".viscous", 0.0);
+               if (n["coulomb"]) t.coulomb(j) = r.valueAtLeast(n["coulomb"], key + ".coulomb", 0.0);
              }
            });
-  perJoint("backlash", {"width"},
+  perJoint("backlash", {"joints", "width"},
            [&](const YAML::Node& n, const std::string& key, const std::vector<int>& js) {
              if (!n["width"]) r.fail(key, "missing 'width' (rad)");
-             const double w = r.number(n["width"], key + ".width", 0.0);
+             const double w = r.valueAtLeast(n["width"], key + ".width", 0.0);
              if (w > 0.1) r.fail(key + ".width", "expected <= 0.1 rad");
              for (int j : js) t.backlash(j) = w;
            });
@@ -202,44 +154,36 @@ TruthEffects loadTruth(const std::string& path, const robots::WholeBodyModel& mo
     if (!p.IsSequence()) r.fail("payload", "expected a list of {link, mass, offset}");
     for (std::size_t k = 0; k < p.size(); ++k) {
       const std::string key = "payload[" + std::to_string(k) + "]";
-      r.keys(p[k], key, {"link", "mass", "offset"});
+      r.onlyKeys(p[k], key, {"link", "mass", "offset"});
       Payload pl;
       if (!p[k]["link"] || !p[k]["mass"]) r.fail(key, "needs 'link' and 'mass'");
       pl.link = p[k]["link"].as<std::string>();
       if (!model.hasFrame(pl.link)) r.fail(key + ".link", "unknown link '" + pl.link + "'");
-      pl.mass = r.positive(p[k]["mass"], key + ".mass");
+      pl.mass = r.positiveValue(p[k]["mass"], key + ".mass");
       if (const YAML::Node o = p[k]["offset"]) {
-        if (!o.IsSequence() || o.size() != 3) r.fail(key + ".offset", "expected [x, y, z] in m");
-        for (std::size_t i = 0; i < 3; ++i)
-          pl.offset(static_cast<Eigen::Index>(i)) = r.number(o[i], key + ".offset", -1.0);
+        pl.offset = r.vector<3>(o, key + ".offset");
         if (pl.offset.cwiseAbs().maxCoeff() > 1.0) r.fail(key + ".offset", "expected |x| <= 1 m");
       }
       t.payloads.push_back(pl);
     }
   }
   if (const YAML::Node c = root["command"]) {
-    r.keys(c, "command", {"delay", "lag"});
-    if (c["delay"]) t.command_delay = r.number(c["delay"], "command.delay", 0.0);
-    if (c["lag"]) t.command_lag = r.number(c["lag"], "command.lag", 0.0);
+    r.onlyKeys(c, "command", {"delay", "lag"});
+    if (c["delay"]) t.command_delay = r.valueAtLeast(c["delay"], "command.delay", 0.0);
+    if (c["lag"]) t.command_lag = r.valueAtLeast(c["lag"], "command.lag", 0.0);
     if (t.command_delay > 1.0 || t.command_lag > 1.0) r.fail("command", "expected <= 1 s");
   }
   if (const YAML::Node f = root["ft_sensor"]) {
-    r.keys(f, "ft_sensor", {"right", "left"});
+    r.onlyKeys(f, "ft_sensor", {"right", "left"});
     for (int side = 0; side < 2; ++side) {
       const char* name = side == 0 ? "right" : "left";
       const YAML::Node s = f[name];
       if (!s) continue;
       const std::string key = std::string("ft_sensor.") + name;
-      r.keys(s, key, {"bias", "scale"});
+      r.onlyKeys(s, key, {"bias", "scale"});
       auto& e = t.ft[static_cast<std::size_t>(side)];
-      if (s["scale"]) e.scale = r.positive(s["scale"], key + ".scale");
-      if (const YAML::Node b = s["bias"]) {
-        if (!b.IsSequence() || b.size() != 6)
-          r.fail(key + ".bias", "expected [fx, fy, fz, mx, my, mz] (N, N m)");
-        for (std::size_t i = 0; i < 6; ++i)
-          e.bias(static_cast<Eigen::Index>(i)) =
-              r.number(b[i], key + ".bias", -std::numeric_limits<double>::max());
-      }
+      if (s["scale"]) e.scale = r.positiveValue(s["scale"], key + ".scale");
+      if (const YAML::Node b = s["bias"]) e.bias = r.vector<6>(b, key + ".bias");
     }
   }
   return t;

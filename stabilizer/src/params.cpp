@@ -7,6 +7,7 @@
 
 #include "overstep/core/error.hpp"
 #include "overstep/core/robot_description.hpp"
+#include "overstep/core/yaml_reader.hpp"
 
 namespace overstep::stabilizer {
 namespace {
@@ -92,45 +93,28 @@ Params loadParams(const std::string& robot_yaml) {
     s.y_max = foot->yMax();
   }
   const YAML::Node root = YAML::LoadFile(robot_yaml);  // parsed once above: cannot fail here
-  const YAML::Node st = root["stabilizer"];
-  if (st) {
-    if (!st.IsMap()) throw InputError(robot_yaml + ": stabilizer: expected a map");
+  const core::YamlReader r(robot_yaml);
+  if (const YAML::Node st = root["stabilizer"]) {
+    if (!st.IsMap()) r.fail("stabilizer", "expected a map");
     for (const auto& kv : st) {
       const std::string key = kv.first.as<std::string>();
-      const std::string where = robot_yaml + ": stabilizer." + key;
+      const std::string where = "stabilizer." + key;
       if (key == "feedback") {
-        const std::string v = kv.second.as<std::string>();
-        if (v == "lipm")
-          p.feedback = Feedback::Lipm;
-        else if (v == "dcm")
-          p.feedback = Feedback::Dcm;
-        else
-          throw InputError(where + ": expected lipm or dcm, got '" + v + "'");
+        const std::string v = r.as<std::string>(kv.second, where);
+        if (v != "lipm" && v != "dcm") r.fail(where, "expected lipm or dcm, got '" + v + "'");
+        p.feedback = v == "lipm" ? Feedback::Lipm : Feedback::Dcm;
         continue;
       }
       if (key == "lipm_poles") {
-        if (!kv.second.IsSequence() || kv.second.size() != 3)
-          throw InputError(where + ": expected a list of 3 decay rates (1/s)");
-        for (std::size_t i = 0; i < 3; ++i) {
-          try {
-            p.lipm_poles[i] = kv.second[i].as<double>();
-          } catch (const YAML::Exception&) {
-            throw InputError(where + ": expected numbers");
-          }
-        }
+        const Eigen::Vector3d l = r.vector<3>(kv.second, where);
+        p.lipm_poles = {l(0), l(1), l(2)};
         continue;
       }
       const ParamSpec* spec = nullptr;
       for (const auto& s : paramTable())
-        if (key == s.key) spec = &s;
-      if (!spec || key == "gravity")
-        throw InputError(where + ": unknown parameter (see stabilizer/README.md)");
-      try {
-        p.*(spec->field) = kv.second.as<double>();
-      } catch (const YAML::Exception&) {
-        throw InputError(where + ": expected a number, got '" + kv.second.as<std::string>("?") +
-                         "'");
-      }
+        if (key == s.key && key != "gravity") spec = &s;
+      if (!spec) r.fail(where, "unknown parameter (see stabilizer/README.md)");
+      p.*(spec->field) = r.value(kv.second, where);
     }
   }
   Params check = p;

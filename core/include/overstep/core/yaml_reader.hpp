@@ -1,0 +1,131 @@
+#pragma once
+/// \file
+/// Validating reads from a YAML document with one-line errors "FILE: KEY: what was expected, got
+/// what" (InputError). Shared by every loader of a YAML file (robot description, planner
+/// configuration, stabilizer parameters, truth effects) so that they word their errors alike.
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <cstdio>
+#include <initializer_list>
+#include <string>
+#include <type_traits>
+
+#include "overstep/core/error.hpp"
+
+namespace overstep::core {
+
+class YamlReader {
+ public:
+  explicit YamlReader(std::string file) : file_(std::move(file)) {}
+
+  const std::string& file() const { return file_; }
+
+  [[noreturn]] void fail(const std::string& key, const std::string& msg) const {
+    throw InputError(file_ + ": " + key + ": " + msg);
+  }
+
+  /// Child `name` of `node`; fails with "missing key" when absent. `where` prefixes the key.
+  YAML::Node need(const YAML::Node& node, const std::string& name, const std::string& where) const {
+    YAML::Node child = node[name];
+    if (!child) fail(join(where, name), "missing key");
+    return child;
+  }
+
+  /// Fails on any key of `map` not in `allowed` (and when `map` is not a map).
+  void onlyKeys(const YAML::Node& map, const std::string& where,
+                std::initializer_list<const char*> allowed) const {
+    if (!map.IsMap()) fail(where.empty() ? std::string("(top level)") : where, "expected a map");
+    for (const auto& kv : map) {
+      const std::string k = kv.first.as<std::string>();
+      bool ok = false;
+      for (const char* a : allowed) ok = ok || k == a;
+      if (!ok) fail(join(where, k), "unknown key");
+    }
+  }
+
+  template <typename T>
+  T as(const YAML::Node& node, const std::string& key) const {
+    try {
+      return node.as<T>();
+    } catch (const YAML::Exception&) {
+      fail(key, "expected a " + typeName<T>() + ", got '" + scalarText(node) + "'");
+    }
+  }
+
+  /// A finite number held by `node` itself.
+  double value(const YAML::Node& node, const std::string& key) const {
+    const double v = as<double>(node, key);
+    if (!std::isfinite(v)) fail(key, "expected a finite number, got " + fmt(v));
+    return v;
+  }
+  double valueAtLeast(const YAML::Node& node, const std::string& key, double min) const {
+    const double v = value(node, key);
+    if (v < min) fail(key, "expected >= " + fmt(min) + ", got " + fmt(v));
+    return v;
+  }
+  double positiveValue(const YAML::Node& node, const std::string& key) const {
+    const double v = value(node, key);
+    if (!(v > 0.0)) fail(key, "expected > 0, got " + fmt(v));
+    return v;
+  }
+
+  /// The same, for child `name` of `parent` (required).
+  double number(const YAML::Node& parent, const std::string& name, const std::string& where) const {
+    return value(need(parent, name, where), join(where, name));
+  }
+  double numberOr(const YAML::Node& parent, const std::string& name, const std::string& where,
+                  double fallback) const {
+    return parent[name] ? number(parent, name, where) : fallback;
+  }
+  double nonNegative(const YAML::Node& parent, const std::string& name,
+                     const std::string& where) const {
+    return valueAtLeast(need(parent, name, where), join(where, name), 0.0);
+  }
+  double positive(const YAML::Node& parent, const std::string& name,
+                  const std::string& where) const {
+    return positiveValue(need(parent, name, where), join(where, name));
+  }
+
+  /// A list of N finite numbers.
+  template <int N>
+  Eigen::Matrix<double, N, 1> vector(const YAML::Node& n, const std::string& key) const {
+    if (!n.IsSequence() || n.size() != static_cast<std::size_t>(N))
+      fail(key, "expected a list of " + std::to_string(N) + " numbers");
+    Eigen::Matrix<double, N, 1> v;
+    for (int i = 0; i < N; ++i) v(i) = value(n[static_cast<std::size_t>(i)], key);
+    return v;
+  }
+  Eigen::Vector3d vec3(const YAML::Node& parent, const std::string& name,
+                       const std::string& where) const {
+    return vector<3>(need(parent, name, where), join(where, name));
+  }
+
+  static std::string fmt(double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return buf;
+  }
+  static std::string join(const std::string& where, const std::string& name) {
+    return where.empty() ? name : where + "." + name;
+  }
+  static std::string scalarText(const YAML::Node& n) {
+    if (n.IsScalar()) return n.Scalar();
+    if (n.IsSequence()) return "<list>";
+    if (n.IsMap()) return "<map>";
+    return "<null>";
+  }
+
+ private:
+  template <typename T>
+  static std::string typeName() {
+    if constexpr (std::is_same_v<T, double> || std::is_same_v<T, int>) return "number";
+    if constexpr (std::is_same_v<T, bool>) return "boolean";
+    return "string";
+  }
+  std::string file_;
+};
+
+}  // namespace overstep::core
