@@ -8,6 +8,7 @@
 namespace overstep {
 void registerModelCommand(CLI::App& app, cli::Registry& registry);
 void registerPlanCommands(CLI::App& app, cli::Registry& registry);
+void registerSimCommand(CLI::App& app, cli::Registry& registry);
 }  // namespace overstep
 
 int main(int argc, char** argv) {
@@ -21,11 +22,13 @@ int main(int argc, char** argv) {
       "  overstep model --json               # the same as one JSON object\n"
       "  overstep plan --out plan.json       # plan the 20 cm x 11 cm overstep\n"
       "  overstep check plan.json            # re-verify a plan on a 1 kHz grid\n"
+      "  overstep sim --realtime             # the simulated robot on LCM\n"
       "  overstep <subcommand> --help        # options of one subcommand\n"
       "Exit codes: 0 ok, 1 internal error, 2 bad input, 3 infeasible request.");
   overstep::cli::Registry registry;
   overstep::registerModelCommand(app, registry);
   overstep::registerPlanCommands(app, registry);
+  overstep::registerSimCommand(app, registry);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -198,11 +198,13 @@ def yaml():
     y.append("")
     y.append("# Passive elastic ankle bushings: rotational spring/damper per axis (seed section II-A).")
     y.append("# stiffness N m/rad: LAAS identification roll 707, pitch 502 [open: sot-torque-control];")
-    y.append("# damping N m s/rad: poorly known, 10-65 in estimators [open]; 30 chosen [est].")
+    y.append("# damping N m s/rad: poorly known, 10-65 in estimators [open]; 10 chosen [est]: the low")
+    y.append("# end, and the largest the simulator's explicit bushing damper keeps stable at 1 ms")
+    y.append("# (d dt <= 0.01; 12 already diverged in one of 7 step tests; sim/README.md).")
     y.append("elastic_joints:")
     for j in elastic:
         k = 707.0 if j["name"].endswith("ROLL") else 502.0
-        y.append("  - {name: %s, stiffness: %s, damping: 30.0}" % (j["name"], f(k)))
+        y.append("  - {name: %s, stiffness: %s, damping: 10.0}" % (j["name"], f(k)))
     y.append("")
     y.append("# Feet. sole: frame at the ankle projection on the sole plane (on the foot body, below the bushing);")
     y.append("# sole rectangle relative to that frame [open: LAAS controllers]; force_sensor: 6-axis F/T frame at")

@@ -26,8 +26,9 @@ struct Simulator::Impl {
   SimOptions opt;
   dart::simulation::WorldPtr world;
   dd::SkeletonPtr robot;
-  std::vector<dd::Joint*> actuated;  // model order
-  std::vector<dd::Joint*> elastic;   // model order
+  std::vector<dd::Joint*> actuated;     // model order
+  std::vector<dd::Joint*> elastic;      // model order
+  std::vector<double> bushing_inertia;  // kg m^2, bodies below each bushing about its axis
   std::array<dd::BodyNode*, 2> foot{};
   std::array<std::vector<dd::BodyNode*>, 2> below_sensor;  // bushing links + foot
   std::array<dd::SimpleFramePtr, 2> sensor;
@@ -51,6 +52,12 @@ Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& tr
   if (!(options.servo_gain > 0.0 && options.servo_gain * options.dt <= 1.0))
     throw InputError("sim: servo gain: expected 0 < Kv dt <= 1");
   const auto& d = s.model.description();
+  // The explicit bushing damper on the light foot diverges beyond d dt ~ 0.01 (d = 12 N m s/rad
+  // diverged in one of seven step tests at 1 ms, 10 in none; measured, sim/README.md).
+  for (double d_e : truth.elastic_damping)
+    if (d_e * options.dt > 0.01 + 1e-12)
+      throw InputError("sim: bushing damping " + std::to_string(d_e) +
+                       " N m s/rad is unstable at this time step (explicit damper: d dt <= 0.01)");
   if (truth.viscous.size() != static_cast<Eigen::Index>(s.model.actuatedCount()) ||
       truth.elastic_stiffness.size() != d.elastic.size())
     throw InputError("sim: truth effects were made for another robot");
@@ -99,10 +106,28 @@ Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& tr
     // The URDF gives passive joints effort 0, which DART turns into force limits of 0.
     jt->setForceLowerLimit(0, -std::numeric_limits<double>::infinity());
     jt->setForceUpperLimit(0, std::numeric_limits<double>::infinity());
-    jt->setSpringStiffness(0, 0.0);  // spring applied explicitly each step
+    jt->setSpringStiffness(0, 0.0);
     jt->setRestPosition(0, 0.0);
-    jt->setDampingCoefficient(0, 0.0);  // damping applied explicitly too
+    jt->setDampingCoefficient(0, 0.0);
     s.elastic.push_back(jt);
+    // Inertia of the bodies below the bushing about its axis (initial posture).
+    const auto* rj = dynamic_cast<const dd::RevoluteJoint*>(jt);
+    const Eigen::Isometry3d Xj =
+        rj->getChildBodyNode()->getWorldTransform() * rj->getTransformFromChildBodyNode();
+    const Eigen::Vector3d axis = Xj.linear() * rj->getAxis(), o = Xj.translation();
+    double inertia = 0.0;
+    std::vector<const dd::BodyNode*> stack{rj->getChildBodyNode()};
+    while (!stack.empty()) {
+      const dd::BodyNode* b = stack.back();
+      stack.pop_back();
+      const Eigen::Matrix3d R = b->getWorldTransform().linear();
+      const Eigen::Vector3d r = b->getCOM() - o;
+      inertia += axis.dot(R * b->getInertia().getMoment() * R.transpose() * axis) +
+                 b->getMass() * (r - r.dot(axis) * axis).squaredNorm();
+      for (std::size_t c = 0; c < b->getNumChildBodyNodes(); ++c)
+        stack.push_back(b->getChildBodyNode(c));
+    }
+    s.bushing_inertia.push_back(std::max(inertia, 1e-6));
   }
 
   // Feet, sensors, IMU.
@@ -201,9 +226,17 @@ void Simulator::step() {
     const auto i = static_cast<Eigen::Index>(j);
     jt->setCommand(0, s.opt.servo_gain * (s.q_ref(i) - jt->getPosition(0)) + s.qd_ref(i));
   }
-  for (std::size_t e = 0; e < s.elastic.size(); ++e)
+  for (std::size_t e = 0; e < s.elastic.size(); ++e) {
+    // A loaded foot is held by its contacts and the bushing moves the whole body: the explicit
+    // damper is stable (up to d dt ~ 0.01). A foot in the air (or before the first contact) is
+    // a tiny inertia on the damper (d dt / I ~ 2-7): there the damper is integrated implicitly
+    // on that inertia, which keeps it stable.
+    const double d = s.truth.elastic_damping[e];
+    const double d_use =
+        contacts_.foot_contact[e / 2] ? d : d / (1.0 + dt * d / s.bushing_inertia[e]);
     s.elastic[e]->setCommand(0, -s.truth.elastic_stiffness[e] * s.elastic[e]->getPosition(0) -
-                                    s.truth.elastic_damping[e] * s.elastic[e]->getVelocity(0));
+                                    d_use * s.elastic[e]->getVelocity(0));
+  }
   s.world->step();
 
   // Ground reaction on each foot from its constraint impulse (only contacts act on the feet).

@@ -63,7 +63,7 @@ TEST(RobotDescription, RejectsNegativeStiffness) {
 }
 
 TEST(RobotDescription, RejectsNegativeDamping) {
-  expectYamlError("damping: 30", "damping: -1", "damping: expected >= 0");
+  expectYamlError("damping: 10", "damping: -1", "damping: expected >= 0");
 }
 
 TEST(RobotDescription, RejectsMalformedYaml) {
