@@ -1,5 +1,6 @@
 #include "overstep/sim/simulator.hpp"
 
+#include <algorithm>
 #include <dart/collision/dart/DARTCollisionDetector.hpp>
 #include <dart/constraint/ConstraintSolver.hpp>
 #include <dart/dynamics/BodyNode.hpp>
@@ -37,6 +38,10 @@ struct Simulator::Impl {
   Eigen::VectorXd q_ref, qd_ref;  // what the servos track (after delay and lag)
   std::deque<std::pair<double, std::pair<Eigen::VectorXd, Eigen::VectorXd>>> pending;  // delay
   Eigen::VectorXd q_cmd, qd_cmd;  // newest command released by the delay line
+  double t_cmd = 0.0;             // when it was released
+  Eigen::VectorXd motor;          // motor-side position (what the encoders read)
+  Eigen::VectorXd load_target;    // load-side servo target after the backlash dead band
+  Eigen::VectorXd friction;       // N m, joint friction torque of the last step
 
   explicit Impl(const robots::WholeBodyModel& m) : model(m) {}
 };
@@ -193,6 +198,10 @@ Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& tr
   s.qd_ref.setZero(na);
   s.q_cmd = s.q_ref;
   s.qd_cmd = s.qd_ref;
+  s.motor = s.q_ref;
+  s.load_target = s.q_ref;
+  s.friction.setZero(na);
+  if (!(options.servo_stiffness > 0.0)) throw InputError("sim: servo stiffness: expected > 0");
 }
 
 Simulator::~Simulator() = default;
@@ -211,20 +220,35 @@ void Simulator::step() {
   while (!s.pending.empty() && s.pending.front().first <= time() + 1e-12) {
     s.q_cmd = s.pending.front().second.first;
     s.qd_cmd = s.pending.front().second.second;
+    s.t_cmd = time();
     s.pending.pop_front();
   }
+  // Between commands the servo follows the commanded position extrapolated with the commanded
+  // velocity (holding the position instead made the joint lead it by qd_ref / Kv). With DART's
+  // velocity servo the joint ends the step where the target was at its start plus qd dt, so the
+  // target is taken at the start of the step (measured: one step of lead otherwise).
+  const double since = time() - s.t_cmd;
   if (s.truth.command_lag > 0.0) {
     const double a = dt / (s.truth.command_lag + dt);
-    s.q_ref += a * (s.q_cmd - s.q_ref);
+    s.q_ref += a * (s.q_cmd + s.qd_cmd * since - s.q_ref);
     s.qd_ref += a * (s.qd_cmd - s.qd_ref);
   } else {
-    s.q_ref = s.q_cmd;
+    s.q_ref = s.q_cmd + s.qd_cmd * since;
     s.qd_ref = s.qd_cmd;
   }
   for (std::size_t j = 0; j < s.actuated.size(); ++j) {
     dd::Joint* jt = s.actuated[j];
     const auto i = static_cast<Eigen::Index>(j);
-    jt->setCommand(0, s.opt.servo_gain * (s.q_ref(i) - jt->getPosition(0)) + s.qd_ref(i));
+    // Joint friction (truth): the servo's position loop lags by friction / stiffness.
+    const double v = jt->getVelocity(0);
+    s.friction(i) = s.truth.viscous(i) * v + s.truth.coulomb(i) * std::tanh(v / 0.01);
+    s.motor(i) = s.q_ref(i) - s.friction(i) / s.opt.servo_stiffness;
+    // Backlash (truth): the load side follows the motor only beyond half the dead band.
+    const double half = 0.5 * s.truth.backlash(i);
+    const double before = s.load_target(i);
+    s.load_target(i) = std::clamp(before, s.motor(i) - half, s.motor(i) + half);
+    const double ff = half > 0.0 && s.load_target(i) == before ? 0.0 : s.qd_ref(i);
+    jt->setCommand(0, s.opt.servo_gain * (s.load_target(i) - jt->getPosition(0)) + ff);
   }
   for (std::size_t e = 0; e < s.elastic.size(); ++e) {
     // A loaded foot is held by its contacts and the bushing moves the whole body: the explicit
@@ -264,6 +288,14 @@ double Simulator::massBelowSensor(int foot) const {
 Eigen::Isometry3d Simulator::basePose() const { return impl_->base->getWorldTransform(); }
 
 Eigen::Vector3d Simulator::com() const { return impl_->robot->getCOM(); }
+
+Eigen::VectorXd Simulator::jointPositions() const {
+  const Impl& s = *impl_;
+  Eigen::VectorXd q(static_cast<Eigen::Index>(s.actuated.size()));
+  for (std::size_t j = 0; j < s.actuated.size(); ++j)
+    q(static_cast<Eigen::Index>(j)) = s.actuated[j]->getPosition(0);
+  return q;
+}
 
 Eigen::Vector4d Simulator::elasticPositions() const {
   Eigen::Vector4d q;
@@ -305,9 +337,11 @@ core::RobotState Simulator::state() const {
   st.utime = static_cast<std::int64_t>(std::llround(time() * 1e6));
   for (int j = 0; j < na; ++j) {
     const dd::Joint* jt = s.actuated[static_cast<std::size_t>(j)];
-    st.q(j) = jt->getPosition(0);
+    // Motor-side encoder: the load-side angle plus the backlash offset.
+    st.q(j) = jt->getPosition(0) + (s.motor(j) - s.load_target(j));
     st.qd(j) = jt->getVelocity(0);
-    st.tau(j) = jt->getConstraintImpulse(0) / s.opt.dt;
+    // Motor torque: what the servo applies plus the joint friction it overcomes.
+    st.tau(j) = jt->getConstraintImpulse(0) / s.opt.dt + s.friction(j);
   }
   const Eigen::Vector3d g(0.0, 0.0, -s.model.description().gravity);
   for (int f = 0; f < 2; ++f) {

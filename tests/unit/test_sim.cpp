@@ -115,3 +115,104 @@ TEST(SimTruth, PayloadAddsItsWeightAndMomentAndBiasIsAConstantOffset) {
   EXPECT_LT((sb.ft_left - sc.ft_left - loaded.ft[1].bias).norm(), 1e-9);
   EXPECT_LT((sb.ft_right - sc.ft_right).norm(), 1e-9) << "lockstep runs are bit-identical";
 }
+
+namespace {
+
+constexpr int kArm = 16;  // RARM_JOINT0: moving it does not disturb the balance much
+
+/// Runs `seconds` with RARM_JOINT0 following ref(t) (and its rate) from the initial posture,
+/// commanded every 5 ms; calls probe(t, sim, reference of the joint at t) after every step.
+template <typename Ref, typename Probe>
+void driveArm(overstep::sim::Simulator& sim, double seconds, Ref ref, Probe probe) {
+  const auto st0 = sim.state();
+  const int steps = static_cast<int>(std::lround(seconds / 0.001));
+  Eigen::VectorXd q = st0.q, qd = Eigen::VectorXd::Zero(st0.q.size());
+  for (int i = 0; i < steps; ++i) {
+    const double t = i * 0.001;
+    if (i % 5 == 0) {
+      const auto [r, rd] = ref(t);
+      q(kArm) = st0.q(kArm) + r;
+      qd(kArm) = rd;
+      sim.setCommand(q, qd);
+    }
+    sim.step();
+    probe(sim.time(), sim, st0.q(kArm) + ref(sim.time()).first);
+  }
+}
+
+}  // namespace
+
+TEST(SimTruth, CommandDelayShiftsTheJointResponseByTheDelay) {
+  auto onset = [](double delay) {
+    auto truth = overstep::sim::noTruthEffects(model());
+    truth.command_delay = delay;
+    overstep::sim::Simulator sim(model(), truth);
+    const double q0 = sim.jointPositions()(kArm);
+    double first = -1.0;
+    driveArm(
+        sim, 0.6, [](double t) { return std::make_pair(t >= 0.2 ? 0.05 : 0.0, 0.0); },
+        [&](double t, const overstep::sim::Simulator& s, double) {
+          if (first < 0.0 && std::abs(s.jointPositions()(kArm) - q0) > 1e-3) first = t;
+        });
+    return first;
+  };
+  const double clean = onset(0.0), delayed = onset(0.02);
+  ASSERT_GT(clean, 0.0);
+  EXPECT_NEAR(delayed - clean, 0.02, 0.0015);
+}
+
+TEST(SimTruth, JointFrictionMakesTheTrackingErrorGrowWithSpeed) {
+  const double viscous = 3.0, coulomb = 2.0;
+  auto worstError = [&](double omega, bool with_friction) {
+    auto truth = overstep::sim::noTruthEffects(model());
+    if (with_friction) {
+      truth.viscous(kArm) = viscous;
+      truth.coulomb(kArm) = coulomb;
+    }
+    overstep::sim::Simulator sim(model(), truth);
+    double worst = 0.0;
+    const double amp = 0.1;
+    driveArm(
+        sim, 2.0,
+        [&](double t) {
+          return std::make_pair(amp * std::sin(omega * t), amp * omega * std::cos(omega * t));
+        },
+        [&](double t, const overstep::sim::Simulator& s, double q_ref) {
+          // at the velocity peaks (sin crosses zero), after the first second
+          if (t > 1.0 && std::abs(std::sin(omega * t)) < 0.05)
+            worst = std::max(worst, std::abs(s.state().q(kArm) - q_ref));
+        });
+    return worst;
+  };
+  const double slow = worstError(2.0, true), fast = worstError(8.0, true);
+  const double k = overstep::sim::SimOptions{}.servo_stiffness;
+  // Steady state of a position loop with stiffness k: error = (viscous v + coulomb) / k.
+  EXPECT_NEAR(slow, (viscous * 0.2 + coulomb) / k, 0.25 * (viscous * 0.2 + coulomb) / k);
+  EXPECT_NEAR(fast, (viscous * 0.8 + coulomb) / k, 0.25 * (viscous * 0.8 + coulomb) / k);
+  EXPECT_GT(fast, slow);
+  EXPECT_LT(worstError(8.0, false), 0.1 * fast) << "no friction, no such error";
+}
+
+TEST(SimTruth, BacklashHoldsTheLoadSideUntilTheDeadBandIsCrossed) {
+  auto truth = overstep::sim::noTruthEffects(model());
+  const double width = 0.02;
+  truth.backlash(kArm) = width;
+  overstep::sim::Simulator sim(model(), truth);
+  const double q0 = sim.jointPositions()(kArm);
+  // Up 0.1 rad in 0.5 s, then back down at the same speed.
+  auto ref = [](double t) {
+    return t < 0.5 ? std::make_pair(0.2 * t, 0.2) : std::make_pair(0.1 - 0.2 * (t - 0.5), -0.2);
+  };
+  double load_at_turn = 0.0, load_after_half_band = 0.0, load_after_band = 0.0;
+  driveArm(sim, 1.0, ref, [&](double t, const overstep::sim::Simulator& s, double) {
+    const double load = s.jointPositions()(kArm) - q0;
+    if (std::abs(t - 0.5) < 5e-4) load_at_turn = load;
+    if (std::abs(t - (0.5 + 0.5 * width / 0.2)) < 5e-4) load_after_half_band = load;
+    if (std::abs(t - (0.5 + 1.5 * width / 0.2)) < 5e-4) load_after_band = load;
+  });
+  // Going up the load trails the motor by half the band; after the turn it stays put until the
+  // motor has crossed the whole band, then follows again (half a band later: 0.5 width lower).
+  EXPECT_NEAR(load_at_turn, 0.1 - 0.5 * width, 1e-3);
+  EXPECT_NEAR(load_after_half_band, 0.1 - 0.5 * width, 1e-3);
+  EXPECT_NEAR(load_after_band, 0.1 - width, 1e-3);
+}

@@ -23,6 +23,9 @@ namespace overstep::sim {
 struct SimOptions {
   double dt = 0.001;          ///< s, physics step
   double servo_gain = 300.0;  ///< 1/s, Kv of the velocity servo (Kv dt <= 1)
+  /// N m/rad, position stiffness of a joint servo: a load torque tau (here joint friction) makes
+  /// the joint lag its reference by tau / stiffness, as a PD position loop does [est].
+  double servo_stiffness = 3000.0;
   double ground_friction = 1.0;
 };
 
@@ -59,6 +62,9 @@ class Simulator {
   double totalMass() const;
   /// Mass below each F/T sensor (bushing links and foot), kg.
   double massBelowSensor(int foot) const;
+  /// Ground truth: load-side joint angles (actuated, model order), rad. The encoders (state().q)
+  /// sit on the motor side and differ from these by the backlash.
+  Eigen::VectorXd jointPositions() const;
   /// Current bushing angles [R roll, R pitch, L roll, L pitch], rad.
   Eigen::Vector4d elasticPositions() const;
   /// Ground truth: moment about each bushing axis of the external forces on the bodies below it
