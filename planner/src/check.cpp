@@ -6,9 +6,14 @@
 
 #include "overstep/core/error.hpp"
 #include "overstep/core/wrench.hpp"
-#include "overstep/planner/collision.hpp"
+#include "overstep/robots/collision.hpp"
 
 namespace overstep::planner {
+using robots::Capsule;
+using robots::capsuleDistance;
+using robots::ObstacleGeometry;
+using robots::obstacleDistance;
+using robots::smoothMin;
 namespace {
 
 double jsonNumber(const nlohmann::json& j, const char* key, double fallback) {

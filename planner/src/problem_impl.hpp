@@ -18,10 +18,15 @@
 
 #include "overstep/core/error.hpp"
 #include "overstep/core/wrench.hpp"
-#include "overstep/planner/collision.hpp"
+#include "overstep/robots/collision.hpp"
 #include "overstep/planner/spline.hpp"
 
 namespace overstep::planner {
+using robots::Capsule;
+using robots::capsuleDistance;
+using robots::ObstacleGeometry;
+using robots::obstacleDistance;
+using robots::smoothMin;
 namespace detail {
 
 inline constexpr int kRight = 0;

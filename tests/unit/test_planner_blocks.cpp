@@ -6,11 +6,16 @@
 
 #include "overstep/core/error.hpp"
 #include "overstep/core/obstacle.hpp"
-#include "overstep/planner/collision.hpp"
+#include "overstep/robots/collision.hpp"
 #include "overstep/planner/phases.hpp"
 #include "overstep/planner/spline.hpp"
 
 namespace overstep::planner {
+using robots::Capsule;
+using robots::capsuleDistance;
+using robots::ObstacleGeometry;
+using robots::obstacleDistance;
+using robots::smoothMin;
 namespace {
 
 Eigen::VectorXd durations() {

@@ -1,4 +1,4 @@
-#include "overstep/planner/collision.hpp"
+#include "overstep/robots/collision.hpp"
 
 #include <fcl/geometry/shape/box.h>
 #include <fcl/geometry/shape/capsule.h>
@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace overstep::planner {
+namespace overstep::robots {
 namespace {
 
 /// FCL's capsule is centred with its axis along local z: pose from the segment.
@@ -127,4 +127,4 @@ double smoothMin(const Eigen::VectorXd& d, double rho, Eigen::VectorXd* weights)
   return m - std::log(s) / rho;
 }
 
-}  // namespace overstep::planner
+}  // namespace overstep::robots

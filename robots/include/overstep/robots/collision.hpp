@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Collision geometry for the planner: link capsules (rounded cylinders, seed III-C-2) and the
+/// Collision geometry (planner, check and simulator): link capsules (rounded cylinders, seed III-C-2) and the
 /// obstacle, with signed distances from FCL (negative = penetration depth), and a smooth minimum
 /// (Kreisselmeier-Steinhauser) to aggregate many distances into one differentiable row.
 
@@ -8,7 +8,7 @@
 
 #include "overstep/core/obstacle.hpp"
 
-namespace overstep::planner {
+namespace overstep::robots {
 
 /// A capsule in the world frame: segment p0-p1 swept by a sphere of `radius`.
 struct Capsule {
@@ -40,4 +40,4 @@ double obstacleDistance(const Capsule& a, const ObstacleGeometry& obstacle,
 /// d(smoothMin)/d(d_i) (softmax weights, summing to 1) if requested.
 double smoothMin(const Eigen::VectorXd& d, double rho, Eigen::VectorXd* weights = nullptr);
 
-}  // namespace overstep::planner
+}  // namespace overstep::robots
