@@ -11,8 +11,8 @@
 namespace overstep::planner {
 using robots::Capsule;
 using robots::capsuleDistance;
-using robots::ObstacleGeometry;
 using robots::obstacleDistance;
+using robots::ObstacleGeometry;
 using robots::smoothMin;
 namespace {
 

@@ -18,14 +18,14 @@
 
 #include "overstep/core/error.hpp"
 #include "overstep/core/wrench.hpp"
-#include "overstep/robots/collision.hpp"
 #include "overstep/planner/spline.hpp"
+#include "overstep/robots/collision.hpp"
 
 namespace overstep::planner {
 using robots::Capsule;
 using robots::capsuleDistance;
-using robots::ObstacleGeometry;
 using robots::obstacleDistance;
+using robots::ObstacleGeometry;
 using robots::smoothMin;
 namespace detail {
 

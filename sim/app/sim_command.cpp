@@ -15,6 +15,7 @@
 
 #include "overstep/cli/command.hpp"
 #include "overstep/core/error.hpp"
+#include "overstep/core/obstacle.hpp"
 #include "overstep/msgs/convert.hpp"
 #include "overstep/sim/simulator.hpp"
 #include "overstep/sim_status_t.hpp"
@@ -38,6 +39,9 @@ struct SimCliOptions {
   double duration = 0.0;
   double fall_height = 0.35;
   bool json = false;
+  bool no_obstacle = false;
+  core::ObstacleSpec obstacle;
+  std::string obstacle_shape = "box";
 };
 
 /// Seeded sensor noise (standard deviations at noise = 1; realistic small values).
@@ -72,7 +76,7 @@ class SimProcess {
   SimProcess(const SimCliOptions& o, const robots::WholeBodyModel& model,
              const sim::TruthEffects& truth)
       : o_(o),
-        sim_(model, truth),
+        sim_(model, truth, simOptions(o)),
         noise_(o.seed, o.noise),
         lcm_(o.lcm_url),
         joints_(model.actuatedCount()) {
@@ -134,6 +138,7 @@ class SimProcess {
     summary_["accepted_commands"] = accepted_;
     summary_["rejected_commands"] = rejected_;
     summary_["fell"] = fell_;
+    summary_["obstacle_contact"] = obstacle_contact_;
     summary_["states_published"] = state_seq_;
     if (o_.json)
       std::cout << summary_.dump(2) << "\n";
@@ -182,14 +187,30 @@ class SimProcess {
       std::fprintf(stderr, "sim: no command for %.2f s: holding the last one\n", o_.hold_timeout);
   }
 
+  static sim::SimOptions simOptions(const SimCliOptions& o) {
+    sim::SimOptions so;
+    so.has_obstacle = !o.no_obstacle;
+    so.obstacle = o.obstacle;
+    return so;
+  }
+
   void detectFall() {
+    const sim::CollisionStatus c = sim_.collisions();
+    if (!obstacle_contact_ && c.obstacleContact()) {
+      obstacle_contact_ = true;
+      std::fprintf(stderr, "sim: OBSTACLE CONTACT at t = %.3f s (%s)\n", sim_.time(),
+                   c.obstacle_link.c_str());
+    }
     if (fell_) return;
     const Eigen::Isometry3d X = sim_.basePose();
     const double tilt = std::acos(std::clamp(X.linear()(2, 2), -1.0, 1.0));
-    if (X.translation().z() < o_.fall_height || tilt > 1.0) {
+    if (X.translation().z() < o_.fall_height || tilt > 1.0 || c.nonFootGroundContact()) {
       fell_ = true;
-      std::fprintf(stderr, "sim: FALL at t = %.3f s (base height %.3f m, tilt %.2f rad)\n",
-                   sim_.time(), X.translation().z(), tilt);
+      std::fprintf(stderr,
+                   "sim: FALL at t = %.3f s (base height %.3f m, tilt %.2f rad, lowest non-foot "
+                   "point %.3f m on %s)\n",
+                   sim_.time(), X.translation().z(), tilt, c.ground_clearance,
+                   c.ground_link.c_str());
     }
   }
 
@@ -210,7 +231,7 @@ class SimProcess {
     s.right_foot_contact = sim_.contacts().foot_contact[0];
     s.left_foot_contact = sim_.contacts().foot_contact[1];
     s.fell = fell_;
-    s.obstacle_contact = false;
+    s.obstacle_contact = obstacle_contact_;
     s.holding = holding_;
     s.rejected_commands = rejected_;
     lcm_.publish("OVERSTEP_SIM_STATUS", &s);
@@ -224,7 +245,7 @@ class SimProcess {
   int steps_per_period_ = 5;
   core::RobotCommand cmd_;
   std::int64_t last_seq_ = -1, accepted_ = 0, rejected_ = 0, state_seq_ = 0;
-  bool fresh_ = false, holding_ = false, fell_ = false;
+  bool fresh_ = false, holding_ = false, fell_ = false, obstacle_contact_ = false;
   double last_command_sim_ = 0.0, rtf_ = 0.0;
   std::chrono::steady_clock::time_point last_command_wall_ = std::chrono::steady_clock::now();
   nlohmann::json summary_;
@@ -238,10 +259,13 @@ int runSim(const SimCliOptions& o) {
   if (!(o.noise >= 0.0 && std::isfinite(o.noise))) throw InputError("--noise: expected >= 0");
   if (!(o.hold_timeout > 0.0)) throw InputError("--hold-timeout: expected > 0 s");
   if (!(o.duration >= 0.0)) throw InputError("--duration: expected >= 0 s");
+  SimCliOptions checked = o;
+  checked.obstacle.shape = core::parseObstacleShape(o.obstacle_shape);
+  if (!o.no_obstacle) core::validate(checked.obstacle);
   const robots::WholeBodyModel model = robots::WholeBodyModel::fromFile(o.robot);
   const sim::TruthEffects truth =
       o.truth.empty() ? sim::noTruthEffects(model) : sim::loadTruth(o.truth, model);
-  SimProcess p(o, model, truth);
+  SimProcess p(checked, model, truth);
   g_stop.store(false);
   auto prev_int = std::signal(SIGINT, onSignal);
   auto prev_term = std::signal(SIGTERM, onSignal);
@@ -276,6 +300,15 @@ void registerSimCommand(CLI::App& app, cli::Registry& registry) {
   sub->add_option("--duration", o->duration, "Stop after this simulated time, s (0: never)")
       ->default_val(0.0);
   sub->add_flag("--json", o->json, "Print a JSON summary on exit");
+  sub->add_option("--obstacle-height", o->obstacle.height, "Envelope height, m")->default_val(0.20);
+  sub->add_option("--obstacle-width", o->obstacle.width, "Envelope width along x, m")
+      ->default_val(0.11);
+  sub->add_option("--obstacle-shape", o->obstacle_shape, "box or cylinder")->default_val("box");
+  sub->add_option("--obstacle-gap", o->obstacle.gap, "From the start toes to the bar, m")
+      ->default_val(0.03);
+  sub->add_option("--margin", o->obstacle.margin, "Extra clearance on every side, m")
+      ->default_val(0.0);
+  sub->add_flag("--no-obstacle", o->no_obstacle, "No bar in the world");
   sub->footer(
       "Examples:\n"
       "  overstep sim --realtime                      # HRP-2 stand-in at 200 Hz on the default "

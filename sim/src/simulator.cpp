@@ -16,6 +16,7 @@
 #include <limits>
 
 #include "overstep/core/error.hpp"
+#include "overstep/robots/collision.hpp"
 
 namespace overstep::sim {
 
@@ -35,6 +36,10 @@ struct Simulator::Impl {
   std::array<dd::SimpleFramePtr, 2> sensor;
   dd::SimpleFramePtr imu;
   dd::BodyNode* base = nullptr;
+  std::vector<std::pair<const dd::BodyNode*, core::CapsuleDescription>> capsules;
+  std::vector<bool> capsule_is_foot;
+  bool has_obstacle = false;
+  robots::ObstacleGeometry obstacle;
   Eigen::VectorXd q_ref, qd_ref;  // what the servos track (after delay and lag)
   std::deque<std::pair<double, std::pair<Eigen::VectorXd, Eigen::VectorXd>>> pending;  // delay
   Eigen::VectorXd q_cmd, qd_cmd;  // newest command released by the delay line
@@ -177,6 +182,25 @@ Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& tr
         sn->getDynamicsAspect()->setFrictionCoeff(options.ground_friction);
     }
   }
+  // Capsules for the geometric checks; the obstacle, if any, as a box the feet can stand on.
+  for (const auto& c : d.capsules) {
+    const dd::BodyNode* bn = s.robot->getBodyNode(c.link);
+    if (!bn) continue;
+    s.capsules.emplace_back(bn, c);
+    s.capsule_is_foot.push_back(bn == s.foot[0] || bn == s.foot[1]);
+  }
+  if (options.has_obstacle) {
+    core::validate(options.obstacle);
+    double toes_x = -1e9;
+    for (int f = 0; f < 2; ++f) {
+      const core::FootDescription* fd = d.foot(f == 0 ? "right" : "left");
+      toes_x = std::max(toes_x, (s.model.framePose(s.model.frameIndex(fd->sole_frame)) *
+                                 Eigen::Vector3d(fd->sole.x_front, 0.0, 0.0))
+                                    .x());
+    }
+    s.has_obstacle = true;
+    s.obstacle = robots::ObstacleGeometry::fromSpec(options.obstacle, toes_x);
+  }
   auto ground = dd::Skeleton::create("ground");
   auto gb = ground->createJointAndBodyNodePair<dd::WeldJoint>().second;
   auto box = std::make_shared<dd::BoxShape>(Eigen::Vector3d(20.0, 20.0, 0.2));
@@ -190,6 +214,14 @@ Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& tr
   s.world->getConstraintSolver()->setCollisionDetector(
       dart::collision::DARTCollisionDetector::create());
   s.world->addSkeleton(ground);
+  if (s.has_obstacle && s.obstacle.shape == core::ObstacleSpec::Shape::Box) {
+    auto bar = dd::Skeleton::create("obstacle");
+    auto bb = bar->createJointAndBodyNodePair<dd::WeldJoint>().second;
+    auto* bs = bb->createShapeNodeWith<dd::CollisionAspect, dd::DynamicsAspect>(
+        std::make_shared<dd::BoxShape>(s.obstacle.size));
+    bs->setRelativeTranslation(s.obstacle.centre);
+    s.world->addSkeleton(bar);
+  }
   s.world->addSkeleton(s.robot);
 
   const int na = s.model.actuatedCount();
@@ -288,6 +320,25 @@ double Simulator::massBelowSensor(int foot) const {
 Eigen::Isometry3d Simulator::basePose() const { return impl_->base->getWorldTransform(); }
 
 Eigen::Vector3d Simulator::com() const { return impl_->robot->getCOM(); }
+
+CollisionStatus Simulator::collisions() const {
+  const Impl& s = *impl_;
+  CollisionStatus c;
+  for (std::size_t i = 0; i < s.capsules.size(); ++i) {
+    const auto& [bn, cd] = s.capsules[i];
+    const Eigen::Isometry3d X = bn->getWorldTransform();
+    const robots::Capsule cap{X * cd.p0, X * cd.p1, cd.radius};
+    if (!s.capsule_is_foot[i]) {
+      const double low = std::min(cap.p0.z(), cap.p1.z()) - cap.radius;
+      if (low < c.ground_clearance) c.ground_clearance = low, c.ground_link = cd.link;
+    }
+    if (s.has_obstacle) {
+      const double dist = robots::obstacleDistance(cap, s.obstacle);
+      if (dist < c.obstacle_distance) c.obstacle_distance = dist, c.obstacle_link = cd.link;
+    }
+  }
+  return c;
+}
 
 Eigen::VectorXd Simulator::jointPositions() const {
   const Impl& s = *impl_;

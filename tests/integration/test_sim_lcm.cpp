@@ -136,6 +136,8 @@ TEST_F(SimLcm, LockstepClientMovesAJointAndReadsItBack) {
   EXPECT_EQ(run.summary["rejected_commands"], 3);
   EXPECT_EQ(run.summary["accepted_commands"], run.last_sent);
   EXPECT_FALSE(run.status.fell);
+  EXPECT_FALSE(run.status.obstacle_contact) << "standing clear of the default bar";
+  EXPECT_EQ(run.summary["obstacle_contact"], false);
   EXPECT_TRUE(run.status.right_foot_contact && run.status.left_foot_contact);
   // The rejected NaN command (+0.5 rad on the joint) never reached the servos.
   double max_dev = 0.0;
@@ -162,7 +164,8 @@ TEST_F(SimLcm, LockstepRunsAreBitIdenticalForTheSameInputsAndSeed) {
 TEST(SimCli, BadInputGivesExit2WithOneLine) {
   for (const char* args :
        {"sim", "sim --lockstep --realtime", "sim --lockstep --rate 333",
-        "sim --lockstep --noise -1", "sim --lockstep --truth /nonexistent.yaml"}) {
+        "sim --lockstep --noise -1", "sim --lockstep --truth /nonexistent.yaml",
+        "sim --lockstep --obstacle-height -1", "sim --lockstep --obstacle-shape pyramid"}) {
     const auto r = overstep::test::runOverstep(args);
     EXPECT_EQ(r.code, 2) << args;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;

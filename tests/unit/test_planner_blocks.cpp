@@ -6,15 +6,15 @@
 
 #include "overstep/core/error.hpp"
 #include "overstep/core/obstacle.hpp"
-#include "overstep/robots/collision.hpp"
 #include "overstep/planner/phases.hpp"
 #include "overstep/planner/spline.hpp"
+#include "overstep/robots/collision.hpp"
 
 namespace overstep::planner {
 using robots::Capsule;
 using robots::capsuleDistance;
-using robots::ObstacleGeometry;
 using robots::obstacleDistance;
+using robots::ObstacleGeometry;
 using robots::smoothMin;
 namespace {
 

@@ -216,3 +216,24 @@ TEST(SimTruth, BacklashHoldsTheLoadSideUntilTheDeadBandIsCrossed) {
   EXPECT_NEAR(load_after_half_band, 0.1 - 0.5 * width, 1e-3);
   EXPECT_NEAR(load_after_band, 0.1 - width, 1e-3);
 }
+
+TEST(SimObstacle, StandingClearOfTheBarAndAnOverlappingBarIsDetected) {
+  overstep::sim::SimOptions o;
+  o.has_obstacle = true;  // the default 20 cm x 11 cm bar, 3 cm ahead of the toes
+  overstep::sim::Simulator clear(model(), overstep::sim::noTruthEffects(model()), o);
+  holdAndMeasure(clear, 0.5);
+  const auto c = clear.collisions();
+  EXPECT_FALSE(c.obstacleContact());
+  EXPECT_GT(c.obstacle_distance, 0.0);
+  EXPECT_LT(c.obstacle_distance, 0.03) << "the nearest capsule is a foot, less than the gap away";
+  EXPECT_GT(c.ground_clearance, 0.0) << "only the feet touch the ground";
+  EXPECT_FALSE(clear.contacts().foot_wrench[0].hasNaN());
+  // A round bar whose margin reaches back over the toes (detection only, no physical body).
+  o.obstacle.shape = overstep::core::ObstacleSpec::Shape::Cylinder;
+  o.obstacle.gap = 0.0;
+  o.obstacle.margin = 0.05;
+  overstep::sim::Simulator overlap(model(), overstep::sim::noTruthEffects(model()), o);
+  const auto c2 = overlap.collisions();
+  EXPECT_TRUE(c2.obstacleContact());
+  EXPECT_NE(c2.obstacle_link.find("LEG"), std::string::npos) << c2.obstacle_link;
+}

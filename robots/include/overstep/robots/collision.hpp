@@ -1,8 +1,9 @@
 #pragma once
 /// \file
-/// Collision geometry (planner, check and simulator): link capsules (rounded cylinders, seed III-C-2) and the
-/// obstacle, with signed distances from FCL (negative = penetration depth), and a smooth minimum
-/// (Kreisselmeier-Steinhauser) to aggregate many distances into one differentiable row.
+/// Collision geometry (planner, check and simulator): link capsules (rounded cylinders, seed
+/// III-C-2) and the obstacle, with signed distances from FCL (negative = penetration depth), and a
+/// smooth minimum (Kreisselmeier-Steinhauser) to aggregate many distances into one differentiable
+/// row.
 
 #include <Eigen/Geometry>
 

@@ -14,6 +14,7 @@
 #include <array>
 #include <memory>
 
+#include "overstep/core/obstacle.hpp"
 #include "overstep/core/robot_io.hpp"
 #include "overstep/robots/whole_body_model.hpp"
 #include "overstep/sim/truth.hpp"
@@ -27,6 +28,20 @@ struct SimOptions {
   /// the joint lag its reference by tau / stiffness, as a PD position loop does [est].
   double servo_stiffness = 3000.0;
   double ground_friction = 1.0;
+  /// The bar to step over (its envelope, placed spec.gap ahead of the start toes). It is a
+  /// physical box for the feet; contact of any leg capsule with it is detected (collisions()).
+  bool has_obstacle = false;
+  core::ObstacleSpec obstacle;
+};
+
+/// Geometric checks of the current posture against the obstacle and the ground.
+struct CollisionStatus {
+  double obstacle_distance = 1e9;  ///< m, smallest leg-capsule to obstacle distance (< 0: overlap)
+  std::string obstacle_link;       ///< which link
+  double ground_clearance = 1e9;   ///< m, lowest point of any non-foot capsule above the ground
+  std::string ground_link;
+  bool obstacleContact() const { return obstacle_distance <= 0.0; }
+  bool nonFootGroundContact() const { return ground_clearance <= 0.0; }
 };
 
 /// Ground-truth contact summary of the last step.
@@ -55,6 +70,8 @@ class Simulator {
   /// Sensor readings now (noise-free; noise is the caller's concern), with ground truth filled.
   core::RobotState state() const;
   const ContactInfo& contacts() const { return contacts_; }
+  /// Obstacle and ground checks of the current posture (capsules of the robot YAML).
+  CollisionStatus collisions() const;
   /// Base (pelvis) pose in the world: ground truth.
   Eigen::Isometry3d basePose() const;
   /// Whole-body CoM in the world: ground truth.
