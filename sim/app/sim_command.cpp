@@ -84,6 +84,7 @@ class SimProcess {
     auto* sub = lcm_.subscribe("OVERSTEP_COMMAND", &SimProcess::onCommand, this);
     sub->setQueueCapacity(1000);  // drain everything; the newest valid command wins
     steps_per_period_ = static_cast<int>(std::lround(1.0 / (o.rate * 0.001)));
+    sim_.settle();  // start settled in half-sitting
     const core::RobotState st = sim_.state();
     cmd_.q_ref = st.q;
     cmd_.qd_ref = Eigen::VectorXd::Zero(joints_);

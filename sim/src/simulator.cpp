@@ -309,6 +309,28 @@ void Simulator::step() {
   contacts_.contact_points = static_cast<int>(s.world->getLastCollisionResult().getNumContacts());
 }
 
+void Simulator::settle(int steps) {
+  // Dynamic relaxation: let the sway on the bushings run and stop every motion each time its
+  // kinetic energy (proxy: the bushing rates) has just peaked, i.e. at the equilibrium.
+  Impl& s = *impl_;
+  double previous = 0.0;
+  for (int i = 0; i < steps; ++i) {
+    step();
+    double energy = 0.0;
+    for (const dd::Joint* jt : s.elastic) energy += jt->getVelocity(0) * jt->getVelocity(0);
+    if (energy < previous) {
+      s.robot->setVelocities(
+          Eigen::VectorXd::Zero(static_cast<Eigen::Index>(s.robot->getNumDofs())));
+      previous = 0.0;
+    } else {
+      previous = energy;
+    }
+  }
+  s.world->setTime(0.0);
+  s.t_cmd = 0.0;
+  s.pending.clear();
+}
+
 double Simulator::totalMass() const { return impl_->robot->getMass(); }
 
 double Simulator::massBelowSensor(int foot) const {

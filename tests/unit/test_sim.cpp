@@ -237,3 +237,22 @@ TEST(SimObstacle, StandingClearOfTheBarAndAnOverlappingBarIsDetected) {
   EXPECT_TRUE(c2.obstacleContact());
   EXPECT_NE(c2.obstacle_link.find("LEG"), std::string::npos) << c2.obstacle_link;
 }
+
+TEST(Sim, SettleStartsInStaticEquilibrium) {
+  overstep::sim::Simulator sim(model(), overstep::sim::noTruthEffects(model()));
+  sim.settle();
+  EXPECT_DOUBLE_EQ(sim.time(), 0.0);
+  const auto st0 = sim.state();
+  double lo = 1e9, hi = -1e9;
+  for (int i = 0; i < 3000; ++i) {
+    if (i % 5 == 0) sim.setCommand(st0.q, Eigen::VectorXd::Zero(st0.q.size()));
+    sim.step();
+    lo = std::min(lo, sim.com().x());
+    hi = std::max(hi, sim.com().x());
+  }
+  EXPECT_LT(hi - lo, 5e-4) << "no sway after settling (without it: about 4 mm)";
+  const Eigen::Vector4d q = sim.elasticPositions(), tau = sim.elasticExternalTorque();
+  for (int e = 0; e < 4; ++e)
+    EXPECT_NEAR(q(e), tau(e) / model().description().elastic[static_cast<std::size_t>(e)].stiffness,
+                2e-4);
+}

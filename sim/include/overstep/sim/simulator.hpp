@@ -65,6 +65,10 @@ class Simulator {
   void setCommand(const Eigen::VectorXd& q_ref, const Eigen::VectorXd& qd_ref);
   /// One physics step.
   void step();
+  /// Relaxes the robot into static equilibrium holding the current commands (`steps` physics
+  /// steps of dynamic relaxation), then restarts the clock at 0. Without it the robot starts
+  /// with undeflected bushings and sways for seconds on their light damping.
+  void settle(int steps = 2000);
   double time() const;
 
   /// Sensor readings now (noise-free; noise is the caller's concern), with ground truth filled.
