@@ -66,15 +66,9 @@ std::string RobotDescription::hashHex() const {
 }
 
 RobotDescription loadRobotDescription(const std::string& yaml_path) {
-  const std::string text = readFile(yaml_path);
+  const std::string text = readFile(yaml_path);  // parsed and hashed
+  YAML::Node root = YamlReader::parse(text, yaml_path);
   Reader r(yaml_path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw InputError(yaml_path + ": malformed YAML at line " + std::to_string(e.mark.line + 1) +
-                     ": " + e.msg);
-  }
   if (!root.IsMap()) throw InputError(yaml_path + ": expected a YAML map at the top level");
 
   RobotDescription d;

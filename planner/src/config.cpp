@@ -82,14 +82,7 @@ std::string PlannerConfig::toJson() const {
 }
 
 PlannerConfig loadPlannerConfig(const std::string& path) {
-  const std::string text = core::readFile(path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw InputError(path + ": malformed YAML at line " + std::to_string(e.mark.line + 1) + ": " +
-                     e.msg);
-  }
+  YAML::Node root = core::YamlReader::loadFile(path);
   PlannerConfig c;
   if (root.IsNull()) return c;
   if (!root.IsMap()) throw InputError(path + ": expected a YAML map at the top level");

@@ -88,14 +88,7 @@ TruthEffects noTruthEffects(const robots::WholeBodyModel& model) {
 }
 
 TruthEffects loadTruth(const std::string& path, const robots::WholeBodyModel& model) {
-  const std::string text = core::readFile(path);
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw InputError(path + ": malformed YAML at line " + std::to_string(e.mark.line + 1) + ": " +
-                     e.msg);
-  }
+  YAML::Node root = core::YamlReader::loadFile(path);
   const Reader r(path);
   TruthEffects t = noTruthEffects(model);
   if (root.IsNull()) return t;

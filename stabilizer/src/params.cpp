@@ -92,7 +92,7 @@ Params loadParams(const std::string& robot_yaml) {
     s.y_min = foot->yMin();
     s.y_max = foot->yMax();
   }
-  const YAML::Node root = YAML::LoadFile(robot_yaml);  // parsed once above: cannot fail here
+  const YAML::Node root = core::YamlReader::loadFile(robot_yaml);
   const core::YamlReader r(robot_yaml);
   if (const YAML::Node st = root["stabilizer"]) {
     if (!st.IsMap()) r.fail("stabilizer", "expected a map");

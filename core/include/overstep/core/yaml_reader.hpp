@@ -14,6 +14,7 @@
 #include <type_traits>
 
 #include "overstep/core/error.hpp"
+#include "overstep/core/robot_description.hpp"
 
 namespace overstep::core {
 
@@ -22,6 +23,19 @@ class YamlReader {
   explicit YamlReader(std::string file) : file_(std::move(file)) {}
 
   const std::string& file() const { return file_; }
+
+  /// Reads and parses a whole YAML file; a missing file or malformed YAML is an InputError
+  /// naming the file (and the line).
+  static YAML::Node loadFile(const std::string& path) { return parse(readFile(path), path); }
+  /// Parses YAML text read from `path` (named in the error).
+  static YAML::Node parse(const std::string& text, const std::string& path) {
+    try {
+      return YAML::Load(text);
+    } catch (const YAML::Exception& e) {
+      throw InputError(path + ": malformed YAML at line " + std::to_string(e.mark.line + 1) + ": " +
+                       e.msg);
+    }
+  }
 
   [[noreturn]] void fail(const std::string& key, const std::string& msg) const {
     throw InputError(file_ + ": " + key + ": " + msg);
