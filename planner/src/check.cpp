@@ -9,11 +9,6 @@
 #include "overstep/robots/collision.hpp"
 
 namespace overstep::planner {
-using robots::Capsule;
-using robots::capsuleDistance;
-using robots::obstacleDistance;
-using robots::ObstacleGeometry;
-using robots::smoothMin;
 namespace {
 
 double jsonNumber(const nlohmann::json& j, const char* key, double fallback) {
@@ -93,7 +88,8 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
     for (int b = 3; b < static_cast<int>(leg_caps.size()); ++b)
       pairs.emplace_back(leg_caps[static_cast<std::size_t>(a)],
                          leg_caps[static_cast<std::size_t>(b)]);
-  const ObstacleGeometry og = ObstacleGeometry::fromSpec(plan.obstacle, plan.toes_x);
+  const robots::ObstacleGeometry og =
+      robots::ObstacleGeometry::fromSpec(plan.obstacle, plan.toes_x);
 
   // Stance reference poses: where each foot is when its contact begins.
   Eigen::Isometry3d anchor[2];
@@ -181,16 +177,17 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
             clear.add(-(X[f] * Eigen::Vector3d(cx, cy, 0.0)).z(), t, side + " sole corner");
       }
     }
-    std::vector<Capsule> wc(d.capsules.size());
+    std::vector<robots::Capsule> wc(d.capsules.size());
     for (std::size_t c = 0; c < d.capsules.size(); ++c) {
       const Eigen::Isometry3d Xc = model.framePose(cap_frame[c]);
       wc[c] = {Xc * d.capsules[c].p0, Xc * d.capsules[c].p1, d.capsules[c].radius};
     }
     for (int c : leg_caps)
-      obst.add(-obstacleDistance(wc[static_cast<std::size_t>(c)], og), t,
+      obst.add(-robots::obstacleDistance(wc[static_cast<std::size_t>(c)], og), t,
                d.capsules[static_cast<std::size_t>(c)].link);
     for (const auto& [a2, b2] : pairs)
-      self.add(-capsuleDistance(wc[static_cast<std::size_t>(a2)], wc[static_cast<std::size_t>(b2)]),
+      self.add(-robots::capsuleDistance(wc[static_cast<std::size_t>(a2)],
+                                        wc[static_cast<std::size_t>(b2)]),
                t,
                d.capsules[static_cast<std::size_t>(a2)].link + "/" +
                    d.capsules[static_cast<std::size_t>(b2)].link);

@@ -22,11 +22,6 @@
 #include "overstep/robots/collision.hpp"
 
 namespace overstep::planner {
-using robots::Capsule;
-using robots::capsuleDistance;
-using robots::obstacleDistance;
-using robots::ObstacleGeometry;
-using robots::smoothMin;
 namespace detail {
 
 inline constexpr int kRight = 0;
@@ -118,7 +113,7 @@ struct OverstepProblem::Impl {
   std::vector<CapsuleRef> caps;
   std::vector<int> leg_caps[2];  // capsules of each leg (indices into caps)
   std::vector<std::pair<int, int>> self_pairs;
-  ObstacleGeometry obstacle_geom;
+  robots::ObstacleGeometry obstacle_geom;
   Eigen::VectorXd q_rest;  // half-sitting (upper body posture held)
 
   std::vector<GridPoint> grid;  // (phase, s); t filled per evaluation
@@ -216,7 +211,7 @@ struct OverstepProblem::Impl {
     }
     height = obstacle.height;
     cop_box = cfg.cop_box;
-    obstacle_geom = ObstacleGeometry::fromSpec(obstacle, toes_x);
+    obstacle_geom = robots::ObstacleGeometry::fromSpec(obstacle, toes_x);
 
     PhaseSpline probe(cfg.spline_intervals);
     n_ctrl = probe.controlPointCount();
@@ -552,7 +547,7 @@ struct OverstepProblem::Impl {
         }
     }
     // Capsules in the world.
-    std::vector<Capsule> wc(caps.size());
+    std::vector<robots::Capsule> wc(caps.size());
     for (std::size_t i = 0; i < caps.size(); ++i) {
       const Eigen::Isometry3d X = m.framePose(caps[i].frame);
       wc[i] = {X * caps[i].p0, X * caps[i].p1, caps[i].radius};
@@ -562,18 +557,21 @@ struct OverstepProblem::Impl {
       Eigen::Index i = 0;
       core::ObstacleSpec spec = obstacle;
       spec.height = height;
-      const ObstacleGeometry og = ObstacleGeometry::fromSpec(spec, toes_x);
+      const robots::ObstacleGeometry og = robots::ObstacleGeometry::fromSpec(spec, toes_x);
       for (int f = 0; f < 2; ++f)
-        for (int c : leg_caps[f]) dist(i++) = obstacleDistance(wc[static_cast<std::size_t>(c)], og);
-      out.ineq(r++) = (cfg.obstacle_clearance - smoothMin(dist, cfg.smooth_min_rho)) / kDistScale;
+        for (int c : leg_caps[f])
+          dist(i++) = robots::obstacleDistance(wc[static_cast<std::size_t>(c)], og);
+      out.ineq(r++) =
+          (cfg.obstacle_clearance - robots::smoothMin(dist, cfg.smooth_min_rho)) / kDistScale;
     }
     {
       Eigen::VectorXd dist(static_cast<Eigen::Index>(self_pairs.size()));
       for (std::size_t i = 0; i < self_pairs.size(); ++i)
         dist(static_cast<Eigen::Index>(i)) =
-            capsuleDistance(wc[static_cast<std::size_t>(self_pairs[i].first)],
-                            wc[static_cast<std::size_t>(self_pairs[i].second)]);
-      out.ineq(r++) = (cfg.self_clearance - smoothMin(dist, cfg.smooth_min_rho)) / kDistScale;
+            robots::capsuleDistance(wc[static_cast<std::size_t>(self_pairs[i].first)],
+                                    wc[static_cast<std::size_t>(self_pairs[i].second)]);
+      out.ineq(r++) =
+          (cfg.self_clearance - robots::smoothMin(dist, cfg.smooth_min_rho)) / kDistScale;
     }
     const Eigen::Matrix3d Rb = m.framePose(base_frame).linear();
     const double roll = rollOf(Rb), pitch = pitchOf(Rb), eps = cfg.pelvis_tilt * cfg.limit_margin;

@@ -11,11 +11,7 @@
 #include "overstep/robots/collision.hpp"
 
 namespace overstep::planner {
-using robots::Capsule;
-using robots::capsuleDistance;
-using robots::obstacleDistance;
-using robots::ObstacleGeometry;
-using robots::smoothMin;
+using namespace robots;  // the collision geometry under test lives in robots/
 namespace {
 
 Eigen::VectorXd durations() {
