@@ -29,6 +29,7 @@ function(overstep_gtest name)
   add_executable(${name} ${T_SOURCES})
   target_link_libraries(${name} PRIVATE ${T_LIBS} GTest::gtest GTest::gtest_main)
   target_compile_definitions(${name} PRIVATE OVERSTEP_DATA_DIR="${OVERSTEP_DATA_DIR}")
+  target_include_directories(${name} PRIVATE ${OVERSTEP_DATA_DIR}/tests/support)
   gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
                        PROPERTIES LABELS "${T_LABELS}")
 endfunction()

@@ -135,11 +135,10 @@ class Stabilizer {
   Params params_;
   Reference ref_{};
   Status status_{};
-  double ramp_ = 0.0;        ///< linear ramp parameter 0..1
-  double held_scale_ = 1.0;  ///< output scale while ramping out of a hold
-  Output raw_{};             ///< unscaled controller state/outputs (integrators live here)
-  Output held_{};            ///< frozen output in Hold
-  Output last_{};            ///< last published output
+  double ramp_ = 0.0;  ///< linear ramp parameter 0..1
+  Output raw_{};       ///< unscaled controller state/outputs (integrators live here)
+  Output held_{};      ///< frozen output in Hold
+  Output last_{};      ///< last published output
   Eigen::Vector2d dcm_integral_ = Eigen::Vector2d::Zero();
   Eigen::Vector2d com_offset_vel_ = Eigen::Vector2d::Zero();
   bool from_hold_ = false;  ///< ramping out from a frozen output
