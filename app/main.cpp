@@ -9,6 +9,7 @@ namespace overstep {
 void registerModelCommand(CLI::App& app, cli::Registry& registry);
 void registerPlanCommands(CLI::App& app, cli::Registry& registry);
 void registerSimCommand(CLI::App& app, cli::Registry& registry);
+void registerReplayCommand(CLI::App& app, cli::Registry& registry);
 }  // namespace overstep
 
 int main(int argc, char** argv) {
@@ -23,12 +24,15 @@ int main(int argc, char** argv) {
       "  overstep plan --out plan.json       # plan the 20 cm x 11 cm overstep\n"
       "  overstep check plan.json            # re-verify a plan on a 1 kHz grid\n"
       "  overstep sim --realtime             # the simulated robot on LCM\n"
+      "  overstep replay plan.json --start   # stream a plan through the stabilizer\n"
       "  overstep <subcommand> --help        # options of one subcommand\n"
-      "Exit codes: 0 ok, 1 internal error, 2 bad input, 3 infeasible request.");
+      "Exit codes: 0 ok, 1 internal error, 2 bad input, 3 infeasible request,\n4 a replay ended "
+      "holding after a fault, 130 interrupted.");
   overstep::cli::Registry registry;
   overstep::registerModelCommand(app, registry);
   overstep::registerPlanCommands(app, registry);
   overstep::registerSimCommand(app, registry);
+  overstep::registerReplayCommand(app, registry);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

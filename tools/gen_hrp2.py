@@ -268,7 +268,11 @@ def yaml():
             ("damping_time_constant", "1.0", "s, return of the foot rotation to the reference"),
             ("max_foot_rotation", "0.17", "rad (10 deg, Kajita 2010)"),
             ("max_foot_rotation_rate", "0.5", "rad/s"),
-            ("force_difference_gain", "1.0e-4", "m/(N s)"),
+            # Off on this model: its only compliance between the feet in double support is the
+            # ankle bushings' roll and pitch, so a foot height difference is fought by the rigid
+            # leg chain; in the simulator any gain (1e-4, and hrpsys's 5.7e-6) rocked the
+            # standing robot from one foot to the other within 0.5 s (docs/runtime.md).
+            ("force_difference_gain", "0.0", "m/(N s), off (see gen_hrp2.py)"),
             ("max_foot_height", "0.02", "m"),
             ("posture_gain", "0.5", "1/s, body posture from the IMU"),
             ("posture_time_constant", "1.5", "s"),

@@ -49,6 +49,7 @@ std::string PlannerConfig::toJson() const {
   nlohmann::json j;
   j["samples_per_phase"] = samples_per_phase;
   j["spline_intervals"] = spline_intervals;
+  j["spline_degree"] = spline_degree;
   j["duration_min"] = duration_min;
   j["duration_max"] = duration_max;
   j["duration_guess"] = duration_guess;
@@ -140,6 +141,9 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
       c.samples_per_phase = r.perPhase<int>(v, key);
     } else if (key == "spline_intervals") {
       c.spline_intervals = r.perPhase<int>(v, key);
+    } else if (key == "spline_degree") {
+      c.spline_degree = r.as<int>(v, key);
+      if (c.spline_degree != 3 && c.spline_degree != 5) r.fail(key, "expected 3 or 5");
     } else if (key == "duration_min") {
       c.duration_min = r.perPhase<double>(v, key);
     } else if (key == "duration_max") {

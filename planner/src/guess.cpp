@@ -31,7 +31,7 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
   x.segment<2>(lay.feet + 4) = L1;
 
   const PhaseTiming timing(x.head(kPhaseCount));
-  PhaseSpline spline(c.spline_intervals);
+  PhaseSpline spline(c.spline_intervals, c.spline_degree);
   spline.setTiming(timing);
   robots::WholeBodyModel& model = *m.ws.front().model;
   const double z_rest = m.q_rest(5);
@@ -138,7 +138,7 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
     for (int j = 0; j < 12; ++j) Y(j, k) = q(m.leg_coord[static_cast<std::size_t>(j)]);
     for (int j = 0; j < 4; ++j) Y(12 + j, k) = q(m.flex_coord[static_cast<std::size_t>(j)]);
     const PhaseSpline::Basis b = spline.evaluate(t);
-    B.block(k, b.first, 1, 4) = b.value.transpose();
+    B.block(k, b.first, 1, b.value.size()) = b.value.transpose();
   }
   // Least-squares fit of the free control points (ties: first three, last three).
   const int F = lay.free_cp;

@@ -45,9 +45,11 @@ void OverstepProblem::bounds(Eigen::VectorXd& lo, Eigen::VectorXd& hi) const {
     lo(i) = c.duration_min[static_cast<std::size_t>(i)];
     hi(i) = c.duration_max[static_cast<std::size_t>(i)];
   }
-  // right start, right landing, left landing
-  lo.segment<2>(lay.feet) << -0.03, -c.start_half_width - 0.05;
-  hi.segment<2>(lay.feet) << 0.03, -c.start_half_width + 0.05;
+  // right start, right landing, left landing. The start is where the robot stands (half-sitting,
+  // soles start_half_width either side of the middle): fixed, or the runtime could not get from
+  // the robot's stance to the plan's first posture without a step.
+  lo.segment<2>(lay.feet) << 0.0, -c.start_half_width;
+  hi.segment<2>(lay.feet) = lo.segment<2>(lay.feet);
   lo.segment<2>(lay.feet + 2) << c.step_length_min, -c.foot_y_max;
   hi.segment<2>(lay.feet + 2) << c.step_length_max, -c.foot_y_min;
   lo.segment<2>(lay.feet + 4) << c.step_length_min, c.foot_y_min;
@@ -57,6 +59,11 @@ void OverstepProblem::bounds(Eigen::VectorXd& lo, Eigen::VectorXd& hi) const {
     const auto& a = d.actuated[static_cast<std::size_t>(m.leg_act[static_cast<std::size_t>(j)])];
     lo.segment(lay.legs + j * lay.free_cp, lay.free_cp).setConstant(a.safeLower());
     hi.segment(lay.legs + j * lay.free_cp, lay.free_cp).setConstant(a.safeUpper());
+    // The motion starts from the robot's static half-sitting posture (the tied first control
+    // points): a replay then begins where the robot stands. A joint-space move between two
+    // double-support postures is not a motion the closed leg chain can make (docs/runtime.md).
+    const double rest = m.q_rest(m.leg_coord[static_cast<std::size_t>(j)]);
+    lo(lay.legs + j * lay.free_cp) = hi(lay.legs + j * lay.free_cp) = rest;
   }
   lo.segment(lay.flex, 4 * lay.free_cp).setConstant(-0.15);
   hi.segment(lay.flex, 4 * lay.free_cp).setConstant(0.15);
@@ -126,7 +133,7 @@ void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at
         c_hi = m.n_ctrl - 1;
       }
       const auto& knots = w.spline->knots();
-      const double t_lo = knots(c_lo), t_hi = knots(c_hi + PhaseSpline::kDegree + 1);
+      const double t_lo = knots(c_lo), t_hi = knots(c_hi + w.spline->degree() + 1);
       std::vector<const SampleOut*> ptr(m.base_samples.size());
       std::vector<SampleOut> changed;
       std::vector<int> changed_k;

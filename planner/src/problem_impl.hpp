@@ -213,7 +213,7 @@ struct OverstepProblem::Impl {
     cop_box = cfg.cop_box;
     obstacle_geom = robots::ObstacleGeometry::fromSpec(obstacle, toes_x);
 
-    PhaseSpline probe(cfg.spline_intervals);
+    PhaseSpline probe(cfg.spline_intervals, cfg.spline_degree);
     n_ctrl = probe.controlPointCount();
     lay.free_cp = n_ctrl - 4;
     if (lay.free_cp < 2) throw InputError("planner: spline_intervals too small");
@@ -277,7 +277,7 @@ struct OverstepProblem::Impl {
     ws.resize(static_cast<std::size_t>(threads));
     for (auto& w : ws) {
       w.model = std::make_unique<robots::WholeBodyModel>(model_template);
-      w.spline = std::make_unique<PhaseSpline>(cfg.spline_intervals);
+      w.spline = std::make_unique<PhaseSpline>(cfg.spline_intervals, cfg.spline_degree);
     }
   }
 
@@ -319,8 +319,9 @@ struct OverstepProblem::Impl {
     st.v.setZero(n);
     st.a.setZero(n);
     const PhaseSpline::Basis b = w.spline->evaluate(t);
-    const auto legs = w.legs_c.middleCols(b.first, 4);
-    const auto flex = w.flex_c.middleCols(b.first, 4);
+    const int nb = static_cast<int>(b.value.size());
+    const auto legs = w.legs_c.middleCols(b.first, nb);
+    const auto flex = w.flex_c.middleCols(b.first, nb);
     const Eigen::VectorXd lq = legs * b.value, lv = legs * b.d1, la = legs * b.d2;
     const Eigen::VectorXd fq = flex * b.value, fv = flex * b.d1, fa = flex * b.d2;
     for (int j = 0; j < 12; ++j) {

@@ -7,9 +7,11 @@
 
 namespace overstep::planner {
 
-using SplineType = Eigen::Spline<double, 1, PhaseSpline::kDegree>;
+using SplineType = Eigen::Spline<double, 1, Eigen::Dynamic>;
 
-PhaseSpline::PhaseSpline(const std::array<int, kPhaseCount>& intervals) : intervals_(intervals) {
+PhaseSpline::PhaseSpline(const std::array<int, kPhaseCount>& intervals, int degree)
+    : intervals_(intervals), degree_(degree) {
+  if (degree != 3 && degree != 5) throw InputError("spline: degree must be 3 or 5");
   for (int n : intervals) {
     if (n < 1) throw InputError("spline: expected >= 1 knot span per phase");
     spans_ += n;
@@ -19,25 +21,28 @@ PhaseSpline::PhaseSpline(const std::array<int, kPhaseCount>& intervals) : interv
 }
 
 void PhaseSpline::setTiming(const PhaseTiming& timing) {
-  knots_.resize(spans_ + 1 + 2 * kDegree);
+  knots_.resize(spans_ + 1 + 2 * degree_);
   int k = 0;
-  for (int r = 0; r < kDegree; ++r) knots_(k++) = 0.0;
+  for (int r = 0; r < degree_; ++r) knots_(k++) = 0.0;
   for (int i = 0; i < kPhaseCount; ++i) {
     const int n = intervals_[static_cast<std::size_t>(i)];
     for (int j = 0; j < n; ++j) knots_(k++) = timing.timeOf(i, static_cast<double>(j) / n);
   }
   t_end_ = timing.total();
-  for (int r = 0; r <= kDegree; ++r) knots_(k++) = t_end_;
+  for (int r = 0; r <= degree_; ++r) knots_(k++) = t_end_;
 }
 
 PhaseSpline::Basis PhaseSpline::evaluate(double t) const {
   const double u = std::clamp(t, 0.0, t_end_);
   const SplineType::KnotVectorType kv = knots_.transpose();
   Basis b;
-  const Eigen::DenseIndex span = SplineType::Span(u, kDegree, kv);
-  b.first = static_cast<int>(span) - kDegree;
-  const auto ders = SplineType::BasisFunctionDerivatives(u, 2, kDegree, kv);
-  for (int j = 0; j <= kDegree; ++j) {
+  const Eigen::DenseIndex span = SplineType::Span(u, degree_, kv);
+  b.first = static_cast<int>(span) - degree_;
+  const auto ders = SplineType::BasisFunctionDerivatives(u, 2, degree_, kv);
+  b.value.resize(degree_ + 1);
+  b.d1.resize(degree_ + 1);
+  b.d2.resize(degree_ + 1);
+  for (int j = 0; j <= degree_; ++j) {
     b.value(j) = ders(0, j);
     b.d1(j) = ders(1, j);
     b.d2(j) = ders(2, j);
@@ -48,7 +53,7 @@ PhaseSpline::Basis PhaseSpline::evaluate(double t) const {
 void PhaseSpline::evaluate(const Eigen::MatrixXd& ctrl, double t, Eigen::VectorXd* x,
                            Eigen::VectorXd* xd, Eigen::VectorXd* xdd) const {
   const Basis b = evaluate(t);
-  const auto block = ctrl.middleCols(b.first, kDegree + 1);
+  const auto block = ctrl.middleCols(b.first, degree_ + 1);
   if (x) *x = block * b.value;
   if (xd) *xd = block * b.d1;
   if (xdd) *xdd = block * b.d2;

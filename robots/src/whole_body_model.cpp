@@ -349,6 +349,12 @@ Eigen::Isometry3d WholeBodyModel::framePose(int frame) const {
   return f.body->getWorldTransform() * f.X_BF;
 }
 
+Eigen::Isometry3d WholeBodyModel::jointPose(const std::string& joint) const {
+  const dart::dynamics::Joint* j = impl_->skel->getJoint(joint);
+  if (!j) throw InputError("unknown joint '" + joint + "' in robot '" + impl_->desc.name + "'");
+  return j->getChildBodyNode()->getWorldTransform() * j->getTransformFromChildBodyNode();
+}
+
 Eigen::MatrixXd WholeBodyModel::frameJacobian(int frame) const {
   const auto& f = impl_->frame(frame);
   return impl_->colsFromDart(impl_->skel->getWorldJacobian(f.body, f.X_BF.translation()));
@@ -377,6 +383,25 @@ Eigen::Vector3d WholeBodyModel::comAcceleration() const {
 }
 Eigen::MatrixXd WholeBodyModel::comJacobian() const {
   return impl_->colsFromDart(impl_->skel->getCOMLinearJacobian());
+}
+
+double WholeBodyModel::massBelow(int frame, Eigen::Vector3d* com_world) const {
+  const BodyNode* top = impl_->frame(frame).body;
+  double m = 0.0;
+  Eigen::Vector3d mc = Eigen::Vector3d::Zero();
+  std::vector<const BodyNode*> stack;
+  for (std::size_t c = 0; c < top->getNumChildBodyNodes(); ++c)
+    stack.push_back(top->getChildBodyNode(c));
+  while (!stack.empty()) {
+    const BodyNode* b = stack.back();
+    stack.pop_back();
+    m += b->getMass();
+    mc += b->getMass() * b->getCOM();
+    for (std::size_t c = 0; c < b->getNumChildBodyNodes(); ++c)
+      stack.push_back(b->getChildBodyNode(c));
+  }
+  if (com_world) *com_world = m > 0.0 ? Eigen::Vector3d(mc / m) : Eigen::Vector3d::Zero();
+  return m;
 }
 
 Vector6d WholeBodyModel::centroidalMomentum() const {

@@ -100,14 +100,23 @@ class SimProcess {
     while (!g_stop.load()) {
       if (o_.duration > 0.0 && sim_.time() >= o_.duration - 1e-9) break;
       if (o_.lockstep) {
-        // One control period per accepted command, as fast as the commands come.
+        // One control period per accepted command, as fast as the commands come. While none
+        // comes, the state is re-announced every hold timeout (new sequence number, same time),
+        // so a runtime that started after the first announcement still gets going.
         fresh_ = false;
+        auto announced = std::chrono::steady_clock::now();
         while (!fresh_ && !g_stop.load()) {
-          if (lcm_.handleTimeout(100) < 0) throw std::runtime_error("LCM receive failed");
-          const double idle =
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - last_command_wall_)
-                  .count();
+          if (lcm_.handleTimeout(100) < 0) {
+            if (g_stop.load()) break;  // interrupted by the signal that stops us
+            throw std::runtime_error("LCM receive failed");
+          }
+          const auto now = std::chrono::steady_clock::now();
+          const double idle = std::chrono::duration<double>(now - last_command_wall_).count();
           if (!fresh_ && idle > o_.hold_timeout && !holding_) setHolding(true);
+          if (!fresh_ && std::chrono::duration<double>(now - announced).count() > o_.hold_timeout) {
+            publish();
+            announced = now;
+          }
         }
         if (g_stop.load()) break;
       } else {

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "overstep/core/plan.hpp"
+#include "overstep/core/robot_io.hpp"
 #include "overstep/robots/whole_body_model.hpp"
 
 namespace overstep::test {
@@ -81,6 +82,38 @@ inline core::Plan standingPlan(robots::WholeBodyModel& m, double duration = 0.5,
     }
   }
   return p;
+}
+
+/// The robot state a perfect robot executing plan sample k would report: encoders on the plan,
+/// each ankle sensor reading the planned contact wrench plus the weight of the bodies below it
+/// (in the sensor frame, [F; M]), the IMU at the planned chest orientation. No noise.
+inline core::RobotState perfectState(robots::WholeBodyModel& m, const core::Plan& plan, int k) {
+  const auto& d = m.description();
+  core::RobotState st;
+  st.resize(m.actuatedCount());
+  st.q = plan.q.col(k).segment(6, m.actuatedCount());
+  st.qd = plan.v.col(k).segment(6, m.actuatedCount());
+  st.tau = plan.tau.col(k);
+  m.setState(plan.q.col(k), plan.v.col(k), plan.a.col(k));
+  for (int f = 0; f < 2; ++f) {
+    const auto* foot = d.foot(f == 0 ? "right" : "left");
+    const int sensor = m.frameIndex(foot->force_sensor_frame);
+    const Eigen::Isometry3d Xs = m.framePose(sensor);
+    const Eigen::Vector3d p = (f == 0 ? plan.right_foot : plan.left_foot).col(k).head<3>();
+    const core::Vector6d w = (f == 0 ? plan.right_wrench : plan.left_wrench).col(k);
+    Eigen::Vector3d F = w.tail<3>();
+    Eigen::Vector3d M = w.head<3>() + (p - Xs.translation()).cross(F);
+    Eigen::Vector3d c;
+    const double mb = m.massBelow(sensor, &c);
+    const Eigen::Vector3d weight(0, 0, -mb * d.gravity);
+    F += weight;
+    M += (c - Xs.translation()).cross(weight);
+    core::Vector6d fm;
+    fm << Xs.linear().transpose() * F, Xs.linear().transpose() * M;
+    (f == 0 ? st.ft_right : st.ft_left) = fm;
+  }
+  st.imu_orientation = Eigen::Quaterniond(m.framePose(m.frameIndex("imu")).linear());
+  return st;
 }
 
 }  // namespace overstep::test

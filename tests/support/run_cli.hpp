@@ -1,7 +1,9 @@
 #pragma once
 // Runs the `overstep` binary (OVERSTEP_BIN) as a user would and captures exit code, stdout,
 // stderr and wall time.
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <chrono>
@@ -33,6 +35,37 @@ inline RunResult runOverstep(const std::string& args) {
   r.err = slurp(errfile);
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
+}
+
+/// Starts `overstep ARGS` in the background with stdout and stderr to files; returns its pid
+/// (the shell execs the binary, so killing the pid kills overstep itself).
+inline pid_t spawnOverstep(const std::string& args, const std::string& out_file,
+                           const std::string& err_file) {
+  const std::string cmd =
+      "exec " + std::string(OVERSTEP_BIN) + " " + args + " >" + out_file + " 2>" + err_file;
+  const pid_t pid = fork();
+  if (pid == 0) {
+    execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+/// Waits for a spawned process; returns its exit code (-signal if killed, -1000 on timeout,
+/// after which it is killed).
+inline int waitOverstep(pid_t pid, double timeout_s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  int status = 0;
+  while (true) {
+    const pid_t r = waitpid(pid, &status, WNOHANG);
+    if (r == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout_s) {
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      return -1000;
+    }
+    usleep(10000);
+  }
 }
 
 }  // namespace overstep::test

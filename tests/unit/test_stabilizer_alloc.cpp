@@ -2,31 +2,11 @@
 // operator new/delete with counting versions (its own binary, so no other test is affected).
 #include <gtest/gtest.h>
 
-#include <atomic>
-#include <cstdlib>
-#include <new>
+#include <cmath>
 
+#include "alloc_counter.hpp"
 #include "overstep/stabilizer/stabilizer.hpp"
 #include "stabilizer_plants.hpp"
-
-namespace {
-std::atomic<long> g_allocations{0};
-}  // namespace
-
-// GCC 12 at -O1 (the sanitizer build) inlines gtest's new/delete pairs and then flags this
-// malloc/free-based replacement as mismatched: it is not.
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-
-void* operator new(std::size_t n) {
-  ++g_allocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace st = overstep::stabilizer;
 
@@ -47,7 +27,7 @@ TEST(StabilizerRealTime, StepNeverAllocates) {
     st::Measurement bad = m;
     bad.com.x() = std::nan("");
     s.enable();
-    const long before = g_allocations.load();
+    const long before = overstep::test::allocations();
     for (int i = 0; i < 2000; ++i) {
       s.setReference(i % 400 < 200 ? ds : ss);  // double and single support, clamped ZMP requests
       if (i == 1500)
@@ -56,14 +36,14 @@ TEST(StabilizerRealTime, StepNeverAllocates) {
         s.step(m, 0.005, out);
       if (i == 1600) s.disable();  // ramp out of the hold
     }
-    EXPECT_EQ(g_allocations.load() - before, 0) << "heap allocations inside step()";
+    EXPECT_EQ(overstep::test::allocations() - before, 0) << "heap allocations inside step()";
     EXPECT_EQ(s.status().mode, st::Mode::Off);
   }
 }
 
 TEST(StabilizerRealTime, TheCounterWorks) {
-  const long before = g_allocations.load();
+  const long before = overstep::test::allocations();
   auto* v = new std::vector<int>(100);
   delete v;
-  EXPECT_GE(g_allocations.load() - before, 2);
+  EXPECT_GE(overstep::test::allocations() - before, 2);
 }

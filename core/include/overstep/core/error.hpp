@@ -18,6 +18,7 @@ enum ExitCode : int {
   kExitInternal = 1,    ///< a bug or an unexpected failure
   kExitBadInput = 2,    ///< malformed/invalid input: files, flags, values
   kExitInfeasible = 3,  ///< the request was understood but cannot be satisfied
+  kExitHeld = 4,        ///< a run ended holding after a fault (overstep replay)
   kExitInterrupted = 130,
 };
 

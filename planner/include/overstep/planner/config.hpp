@@ -25,6 +25,7 @@ struct SolverSettings {
 struct PlannerConfig {
   std::array<int, kPhaseCount> samples_per_phase{8, 14, 5, 14, 8};
   std::array<int, kPhaseCount> spline_intervals{3, 6, 3, 6, 3};
+  int spline_degree = 3;  ///< 3 (cubic) or 5 (quintic: continuous jerk; docs/planner.md)
   std::array<double, kPhaseCount> duration_min{0.4, 0.7, 0.15, 0.7, 0.4};
   std::array<double, kPhaseCount> duration_max{1.2, 2.0, 1.0, 2.0, 1.2};
   std::array<double, kPhaseCount> duration_guess{0.8, 1.5, 0.6, 1.5, 0.8};

@@ -1,10 +1,11 @@
 #pragma once
 /// \file
-/// Cubic B-spline basis whose knots move with the phase durations (the planner's joint
-/// parametrization). Phase i is split into `intervals[i]` equal knot spans; the knot vector is
-/// clamped at both ends, so the curve starts at the first control point and ends at the last.
-/// The curve is C2 everywhere, including across phase boundaries. Basis functions come from
-/// Eigen's (unsupported) Splines module.
+/// B-spline basis (cubic or quintic) whose knots move with the phase durations (the planner's
+/// joint parametrization). Phase i is split into `intervals[i]` equal knot spans; the knot vector
+/// is clamped at both ends, so the curve starts at the first control point and ends at the last.
+/// A degree-p curve is C(p-1) everywhere, including across phase boundaries: cubic curves have
+/// accelerations that are only continuous (kinks at the knots), quintic ones continuous jerk.
+/// Basis functions come from Eigen's (unsupported) Splines module.
 ///
 /// A trajectory is x(t) = sum_k B_k(t) c_k; its derivatives use dB_k/dt and d2B_k/dt2.
 
@@ -17,23 +18,23 @@ namespace overstep::planner {
 
 class PhaseSpline {
  public:
-  static constexpr int kDegree = 3;
+  static constexpr int kMaxDegree = 5;
+  using Coefficients = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxDegree + 1, 1>;
 
-  /// intervals[i] >= 1 knot spans in phase i. Throws InputError otherwise.
-  explicit PhaseSpline(const std::array<int, kPhaseCount>& intervals);
+  /// intervals[i] >= 1 knot spans in phase i; degree 3 or 5. Throws InputError otherwise.
+  explicit PhaseSpline(const std::array<int, kPhaseCount>& intervals, int degree = 3);
 
-  int controlPointCount() const { return spans_ + kDegree; }
+  int degree() const { return degree_; }
+  int controlPointCount() const { return spans_ + degree_; }
   /// Rebuilds the knots for new phase durations.
   void setTiming(const PhaseTiming& timing);
   const Eigen::ArrayXd& knots() const { return knots_; }
 
-  /// The (at most) 4 non-zero basis functions at t: index of the first and value / first /
+  /// The degree + 1 non-zero basis functions at t: index of the first and value / first /
   /// second time derivative of each.
   struct Basis {
     int first = 0;
-    Eigen::Vector4d value = Eigen::Vector4d::Zero();
-    Eigen::Vector4d d1 = Eigen::Vector4d::Zero();
-    Eigen::Vector4d d2 = Eigen::Vector4d::Zero();
+    Coefficients value, d1, d2;
   };
   Basis evaluate(double t) const;
 
@@ -44,6 +45,7 @@ class PhaseSpline {
  private:
   std::array<int, kPhaseCount> intervals_;
   int spans_ = 0;
+  int degree_ = 3;
   Eigen::ArrayXd knots_;
   double t_end_ = 0.0;
 };

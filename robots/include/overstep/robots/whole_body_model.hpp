@@ -97,6 +97,9 @@ class WholeBodyModel {
   int frameIndex(const std::string& name) const;
   bool hasFrame(const std::string& name) const;
   Eigen::Isometry3d framePose(int frame) const;  ///< X_WF
+  /// World pose of a joint's frame (its axis passes through the origin), by joint name: e.g. the
+  /// centre of an elastic bushing. Throws InputError for an unknown joint.
+  Eigen::Isometry3d jointPose(const std::string& joint) const;
   /// World-aligned Jacobian of the frame: rows [angular; linear velocity of the frame origin].
   Eigen::MatrixXd frameJacobian(int frame) const;
   /// World-aligned velocity [angular; linear of the origin].
@@ -109,6 +112,9 @@ class WholeBodyModel {
   Eigen::Vector3d comVelocity() const;
   Eigen::Vector3d comAcceleration() const;
   Eigen::MatrixXd comJacobian() const;  ///< 3 x dofs
+  /// Mass (kg) and world centre of mass of the bodies below the frame's body (its descendants,
+  /// not the body itself): what a force sensor on that body carries. Zero mass for a leaf.
+  double massBelow(int frame, Eigen::Vector3d* com_world) const;
   /// Centroidal momentum in the world frame: [linear (kg m/s); angular about the CoM (kg m^2/s)].
   Vector6d centroidalMomentum() const;
 

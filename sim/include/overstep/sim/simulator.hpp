@@ -28,6 +28,13 @@ struct SimOptions {
   /// the joint lag its reference by tau / stiffness, as a PD position loop does [est].
   double servo_stiffness = 3000.0;
   double ground_friction = 1.0;
+  /// DART contact constraint-force mixing: the compliance of the soles on the ground (rubber soles
+  /// and the bushings' translational give, which the rigid model lacks). With DART's default
+  /// (1e-5) double support is a rigid closed chain: a 1e-6 rad knee command offset moved each
+  /// foot's CoP 4 cm in opposite directions; at 3e-3 (with the error reduction set by the
+  /// simulator) a 3e-4 rad offset moves them about 1 cm; 1 diverged (measured, docs/runtime.md).
+  /// Global to DART: every Simulator sets the same value.
+  double contact_softness = 3e-3;
   /// The bar to step over (its envelope, placed spec.gap ahead of the start toes). It is a
   /// physical box for the feet; contact of any leg capsule with it is detected (collisions()).
   bool has_obstacle = false;

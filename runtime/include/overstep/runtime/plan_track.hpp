@@ -1,0 +1,112 @@
+#pragma once
+/// \file
+/// The plan as the fixed-rate loop consumes it. Everything that needs the robot model (DART) is
+/// computed once, when the plan is loaded: per sample, the stabilizer's reference (CoM, table-cart
+/// ZMP, sole poses, sole-frame wrenches, torso orientation), the leg Jacobians that turn the
+/// stabilizer's corrections into joint references, the CoM Jacobian with a stance foot held, and
+/// the force sensors' placement. Sampling and the estimator are then plain fixed-size Eigen
+/// arithmetic: no allocation, no exceptions, no DART in the tick.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "overstep/core/plan.hpp"
+#include "overstep/core/robot_io.hpp"
+#include "overstep/stabilizer/stabilizer.hpp"
+
+namespace overstep::robots {
+class WholeBodyModel;
+}
+
+namespace overstep::runtime {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+/// The plan at one instant (linear interpolation between samples; the model-derived matrices are
+/// those of the nearest sample). Sized once by PlanTrack::makeSample().
+struct TrackSample {
+  double t = 0.0;
+  int index = 0;  ///< nearest plan sample
+  int phase = 0;
+  Eigen::VectorXd q;   ///< actuated joint positions, rad
+  Eigen::VectorXd qd;  ///< actuated joint velocities, rad/s
+  stabilizer::Reference ref;
+  Eigen::Vector3d imu_angular_velocity = Eigen::Vector3d::Zero();  ///< world, planned
+  Eigen::Vector3d base_position = Eigen::Vector3d::Zero();         ///< world, planned
+  Eigen::Vector2d zmp_wholebody = Eigen::Vector2d::Zero();
+};
+
+/// Stabilizer corrections turned into joint offsets (actuated order), and the estimator's state.
+class PlanTrack {
+ public:
+  /// Validates the plan against the model (robot hash, sizes, joint limits within the mechanical
+  /// range, contact in every phase) and precomputes the per-sample data. InputError with a
+  /// one-line reason otherwise. Not real-time.
+  PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model);
+
+  int samples() const { return static_cast<int>(t_.size()); }
+  int joints() const { return joints_; }
+  double duration() const { return duration_; }
+  double rate() const { return rate_; }
+  const std::string& phaseName(int phase) const;
+  const std::vector<std::string>& jointNames() const { return joint_names_; }
+  const Eigen::VectorXd& lower() const { return lower_; }  ///< mechanical limits, rad
+  const Eigen::VectorXd& upper() const { return upper_; }
+  const Eigen::VectorXd& safeLower() const { return safe_lower_; }  ///< planner safety limits
+  const Eigen::VectorXd& safeUpper() const { return safe_upper_; }
+  const Eigen::VectorXd& velocityLimit() const { return vmax_; }  ///< rad/s
+  /// Leg joints of each foot (actuated indices), right then left.
+  const std::array<std::array<int, 6>, 2>& legJoints() const { return leg_; }
+
+  /// A sample with every vector sized (allocates; call once, outside the loop).
+  TrackSample makeSample() const;
+  /// The plan at time t (clamped to [0, duration]). Never allocates.
+  void sample(double t, TrackSample& out) const;
+
+  /// Adds the stabilizer's corrections to out->q (actuated joint references): per leg, the sole
+  /// rotation (about the centre of the ankle bushing, so that a foot held flat by the ground takes
+  /// it as a bushing deflection and the closed chain of double support stays consistent) and
+  /// height change, and the base shift (CoM offset) and rotation (body attitude), through the
+  /// inverse leg Jacobian at the nearest sample. Never allocates.
+  void applyCorrections(const TrackSample& s, const stabilizer::Output& c,
+                        Eigen::VectorXd& q) const;
+
+  /// The stabilizer's measurement from the robot state: sole-frame contact wrenches from the
+  /// ankle force sensors (the weight of the bodies below each sensor removed), the planned sole
+  /// poses, the IMU orientation, and the CoM estimated from the joint encoders (stance foot(s)
+  /// held, weighted by the planned normal forces) plus the body's rotation about the stance sole
+  /// that the IMU sees beyond the plan (the elastic-ankle sway). Never allocates.
+  void estimate(const TrackSample& s, const core::RobotState& st,
+                stabilizer::Measurement& out) const;
+
+  /// Sole-frame contact wrench [M; F] of foot f from its sensor reading (sensor frame [F; M]).
+  core::Vector6d soleWrench(int index, int f, const core::Vector6d& ft) const;
+
+ private:
+  int joints_ = 0;
+  double duration_ = 0.0, rate_ = 200.0;
+  std::vector<std::string> joint_names_, phase_names_;
+  Eigen::VectorXd lower_, upper_, safe_lower_, safe_upper_, vmax_;
+  std::array<std::array<int, 6>, 2> leg_{};
+  Eigen::VectorXd t_;
+  Eigen::VectorXi phase_;
+  std::vector<std::array<bool, 2>> contact_;
+  Eigen::MatrixXd q_, qd_;  ///< joints x N
+  Eigen::MatrixXd com_, com_vel_, com_acc_, zmp_, zmp_vel_, zmp_wb_;
+  Eigen::MatrixXd sole_pose_[2];  ///< 7 x N [x y z qw qx qy qz]
+  Eigen::MatrixXd wrench_[2];     ///< 6 x N [M; F] sole frame
+  Eigen::MatrixXd imu_quat_, imu_omega_, base_pos_;
+  std::vector<Matrix6d> leg_inv_[2];      ///< (d sole twist / d leg joints)^-1, world-aligned
+  Eigen::MatrixXd sole_from_base_[2];     ///< 3 x N, p_sole - p_base
+  Eigen::MatrixXd sole_from_bushing_[2];  ///< 3 x N, p_sole - centre of the ankle bushing
+  std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> com_jac_[2];  ///< 3 x joints, foot held
+  Eigen::MatrixXd sensor_pose_[2];  ///< 7 x N sensor frame in the world
+  Eigen::MatrixXd below_com_[2];    ///< 3 x N, CoM of the bodies below each sensor
+  double below_mass_[2] = {0.0, 0.0};
+  double gravity_ = 9.81;
+};
+
+}  // namespace overstep::runtime

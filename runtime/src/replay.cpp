@@ -1,0 +1,245 @@
+#include "overstep/runtime/replay.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "overstep/core/error.hpp"
+
+namespace overstep::runtime {
+
+const char* toString(State s) {
+  switch (s) {
+    case State::Idle:
+      return "idle";
+    case State::MovingToStart:
+      return "moving_to_start";
+    case State::Running:
+      return "running";
+    case State::Paused:
+      return "paused";
+    case State::Finished:
+      return "finished";
+    case State::Hold:
+      return "hold";
+  }
+  return "unknown";
+}
+
+const char* toString(FaultReason r) {
+  switch (r) {
+    case FaultReason::None:
+      return "";
+    case FaultReason::NoState:
+      return "no robot state for the watchdog period";
+    case FaultReason::NonFiniteState:
+      return "non-finite value in the robot state";
+    case FaultReason::BadStateSize:
+      return "robot state has the wrong joint count";
+    case FaultReason::JointLimit:
+      return "a measured joint is beyond its limit";
+    case FaultReason::Fall:
+      return "the robot reports a fall";
+    case FaultReason::StabilizerFault:
+      return "stabilizer fault";
+    case FaultReason::Stopped:
+      return "stopped by the operator";
+  }
+  return "unknown";
+}
+
+Replay::Replay(const PlanTrack& track, const stabilizer::Params& params,
+               const ReplayOptions& options)
+    : track_(track), opt_(options), stab_(params) {
+  if (!(opt_.rate >= 50.0 && opt_.rate <= 1000.0))
+    throw InputError("replay rate: expected 50 to 1000 Hz");
+  if (!(opt_.move_speed > 0.0 && opt_.move_speed <= 1.0))
+    throw InputError("replay move speed: expected a fraction in (0, 1]");
+  if (opt_.watchdog_periods < 1) throw InputError("replay watchdog: expected >= 1 period");
+  const int n = track.joints();
+  out_.command.resize(n);
+  out_.sample = track.makeSample();
+  last_state_.resize(n);
+  move_from_.setZero(n);
+  q_hold_.setZero(n);
+  q_prev_.setZero(n);
+  qd_zero_.setZero(n);
+}
+
+void Replay::start() { start_requested_ = true; }
+
+void Replay::pause() {
+  if (out_.state == State::Running) out_.state = State::Paused;
+}
+
+void Replay::resume() {
+  if (out_.state == State::Paused) out_.state = State::Running;
+}
+
+void Replay::stop() { enterHold(FaultReason::Stopped); }
+
+void Replay::reportFault(FaultReason why) { enterHold(why); }
+
+void Replay::enterHold(FaultReason why) {
+  if (out_.state == State::Hold) return;  // the first reason stays
+  out_.fault = why;
+  // Freeze the reference: the plan sample of now while executing it (the stabilizer's
+  // corrections then ramp out around it, continuously), else the posture being commanded.
+  const bool on_plan =
+      out_.state == State::Running || out_.state == State::Paused || out_.state == State::Finished;
+  if (on_plan)
+    q_hold_ = out_.sample.q;
+  else
+    q_hold_ = prev_valid_ ? q_prev_ : (have_state_ ? last_state_.q : out_.sample.q);
+  stab_.disable();
+  out_.state = State::Hold;
+}
+
+FaultReason Replay::validate(const core::RobotState& st) const {
+  const int n = track_.joints();
+  if (st.q.size() != n || st.qd.size() != n) return FaultReason::BadStateSize;
+  if (!st.q.allFinite() || !st.qd.allFinite() || !st.ft_right.allFinite() ||
+      !st.ft_left.allFinite() || !st.imu_orientation.coeffs().allFinite() ||
+      !st.imu_angular_velocity.allFinite())
+    return FaultReason::NonFiniteState;
+  for (int j = 0; j < n; ++j)
+    if (st.q(j) < track_.lower()(j) - opt_.joint_limit_margin ||
+        st.q(j) > track_.upper()(j) + opt_.joint_limit_margin)
+      return FaultReason::JointLimit;
+  return FaultReason::None;
+}
+
+const TickOutput& Replay::tick(const core::RobotState* state) {
+  const double dt = 1.0 / opt_.rate;
+  ++ticks_;
+  if (state) {
+    const FaultReason f = validate(*state);
+    if (f != FaultReason::None) {
+      enterHold(f);
+    } else {
+      last_state_ = *state;  // same sizes: no allocation
+      have_state_ = true;
+      missed_ = 0;
+    }
+  } else if (have_state_ && ++missed_ >= opt_.watchdog_periods) {
+    enterHold(FaultReason::NoState);
+  }
+
+  switch (out_.state) {
+    case State::Idle:
+      if (start_requested_ && have_state_) {
+        move_from_ = last_state_.q;
+        double T = opt_.min_move_time;
+        for (int j = 0; j < track_.joints(); ++j) {
+          const double dist = std::abs(out_.sample.q(j) - move_from_(j));
+          // A quintic blend peaks at 15/8 of the mean speed.
+          T = std::max(T, 1.875 * dist / (opt_.move_speed * track_.velocityLimit()(j)));
+        }
+        move_T_ = T;
+        move_t_ = 0.0;
+        out_.state = State::MovingToStart;
+      }
+      break;
+    case State::MovingToStart:
+      move_t_ += dt;
+      if (move_t_ >= move_T_) {
+        out_.state = State::Running;
+        plan_time_ = 0.0;
+        if (opt_.stabilizer) {
+          stab_.reset();
+          stab_.enable();
+        }
+      }
+      break;
+    case State::Running:
+      plan_time_ += dt;
+      if (plan_time_ >= track_.duration()) {
+        plan_time_ = track_.duration();
+        out_.state = State::Finished;
+      }
+      break;
+    case State::Paused:
+    case State::Finished:
+    case State::Hold:
+      break;
+  }
+
+  track_.sample(plan_time_, out_.sample);
+  out_.plan_time = plan_time_;
+  out_.send_command = have_state_ && out_.state != State::Idle;
+
+  // The stabilizer acts while the plan is being (or has been) executed, and ramps out in Hold.
+  const bool stab_active = opt_.stabilizer && out_.state != State::Idle &&
+                           out_.state != State::MovingToStart && have_state_;
+  if (stab_active) {
+    stab_.setReference(out_.sample.ref);
+    track_.estimate(out_.sample, last_state_, meas_);
+    out_.stab_status = stab_.step(meas_, dt, out_.stab);
+    if (!out_.stab_status.ok() && out_.state != State::Hold)
+      enterHold(FaultReason::StabilizerFault);
+  } else {
+    out_.stab = stabilizer::Output{};
+    out_.stab_status = stab_.status();
+  }
+  commandFromReference(stab_active, dt);
+  out_.fault = out_.state == State::Hold ? out_.fault : FaultReason::None;
+  return out_;
+}
+
+void Replay::commandFromReference(bool with_stabilizer, double dt) {
+  core::RobotCommand& c = out_.command;
+  const TrackSample& s = out_.sample;
+  switch (out_.state) {
+    case State::Idle:
+      c.q_ref = have_state_ ? last_state_.q : s.q;
+      c.qd_ref = qd_zero_;
+      break;
+    case State::MovingToStart: {
+      const double u = std::clamp(move_t_ / move_T_, 0.0, 1.0);
+      const double b = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
+      const double bd = 30.0 * u * u * (1.0 - u) * (1.0 - u) / move_T_;
+      c.q_ref = move_from_ + b * (s.q - move_from_);
+      c.qd_ref = bd * (s.q - move_from_);
+      break;
+    }
+    case State::Running:
+      c.q_ref = s.q;
+      c.qd_ref = s.qd;
+      break;
+    case State::Paused:
+    case State::Finished:
+      c.q_ref = s.q;
+      c.qd_ref = qd_zero_;
+      break;
+    case State::Hold:
+      c.q_ref = q_hold_;
+      c.qd_ref = qd_zero_;
+      break;
+  }
+  if (with_stabilizer) {
+    // In Hold the corrections ramp out around the frozen posture, without the plan's motion.
+    track_.applyCorrections(s, out_.stab, c.q_ref);
+  }
+  out_.clamped = false;
+  double norm2 = 0.0;
+  for (int j = 0; j < track_.joints(); ++j) {
+    double q = std::clamp(c.q_ref(j), track_.lower()(j), track_.upper()(j));
+    if (prev_valid_) {
+      const double step = track_.velocityLimit()(j) * dt;
+      q = std::clamp(q, q_prev_(j) - step, q_prev_(j) + step);
+    }
+    if (q != c.q_ref(j)) out_.clamped = true;
+    c.q_ref(j) = q;
+    c.qd_ref(j) = std::clamp(c.qd_ref(j), -track_.velocityLimit()(j), track_.velocityLimit()(j));
+    const double e = with_stabilizer ? q - (out_.state == State::Hold ? q_hold_(j) : s.q(j)) : 0.0;
+    norm2 += e * e;
+  }
+  out_.correction_norm = std::sqrt(norm2);
+  c.has_tau_ff = false;
+  c.seq = out_.send_command ? seq_++ : seq_;
+  if (out_.send_command) {
+    q_prev_ = c.q_ref;
+    prev_valid_ = true;
+  }
+}
+
+}  // namespace overstep::runtime

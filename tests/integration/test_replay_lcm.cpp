@@ -1,0 +1,287 @@
+// `overstep replay` on LCM udpm inside the private network namespace of netns_run.sh: lockstep
+// end to end with the simulator, the lcm clock paced by the simulator's states, the watchdog when
+// the simulator is killed, pause / resume / stop over the control channel, dropped and delayed
+// state messages from a stand-in robot, and bad input that must not send anything.
+#include <gtest/gtest.h>
+#include <lcm/lcm-cpp.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <deque>
+#include <future>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <thread>
+
+#include "overstep/msgs/convert.hpp"
+#include "overstep/plan_reference_t.hpp"
+#include "overstep/replay_control_t.hpp"
+#include "overstep/robot_command_t.hpp"
+#include "overstep/robot_state_t.hpp"
+#include "overstep/robots/whole_body_model.hpp"
+#include "overstep/runtime_status_t.hpp"
+#include "plan_fixtures.hpp"
+#include "run_cli.hpp"
+
+namespace overstep {
+namespace {
+
+using nlohmann::json;
+
+class ReplayLcm : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!std::getenv("OVERSTEP_NETNS")) GTEST_SKIP() << "run through netns_run.sh";
+    model_ = std::make_unique<robots::WholeBodyModel>(
+        robots::WholeBodyModel::fromFile(test::hrp2Yaml()));
+    plan_ = test::standingPlan(*model_, 1.5);
+    plan_file_ = dir_.file("stand.json");
+    core::savePlan(plan_, plan_file_);
+  }
+  json parse(const std::string& file) { return json::parse(test::slurp(file), nullptr, false); }
+  test::TempDir dir_;
+  std::unique_ptr<robots::WholeBodyModel> model_;
+  core::Plan plan_;
+  std::string plan_file_;
+};
+
+/// Collects what the runtime publishes.
+struct Listener {
+  std::vector<overstep::runtime_status_t> status;
+  std::vector<double> plan_time;
+  int commands = 0;
+  void onStatus(const lcm::ReceiveBuffer*, const std::string&,
+                const overstep::runtime_status_t* m) {
+    status.push_back(*m);
+  }
+  void onRef(const lcm::ReceiveBuffer*, const std::string&, const overstep::plan_reference_t* m) {
+    plan_time.push_back(m->plan_time);
+  }
+  void onCommand(const lcm::ReceiveBuffer*, const std::string&, const overstep::robot_command_t*) {
+    ++commands;
+  }
+  void attach(lcm::LCM& bus) {
+    bus.subscribe("OVERSTEP_RUNTIME", &Listener::onStatus, this)->setQueueCapacity(100000);
+    bus.subscribe("OVERSTEP_PLAN_REF", &Listener::onRef, this)->setQueueCapacity(100000);
+    bus.subscribe("OVERSTEP_COMMAND", &Listener::onCommand, this)->setQueueCapacity(100000);
+  }
+};
+
+TEST_F(ReplayLcm, LockstepWithTheSimulatorFinishesStanding) {
+  const pid_t replay = test::spawnOverstep(
+      "replay " + plan_file_ + " --clock lockstep --start --json --quiet --linger 0.3",
+      dir_.file("replay.json"), dir_.file("replay.err"));
+  const pid_t sim = test::spawnOverstep("sim --lockstep --no-obstacle --json",
+                                        dir_.file("sim.json"), dir_.file("sim.err"));
+  const int code = test::waitOverstep(replay, 120);
+  kill(sim, SIGTERM);
+  EXPECT_EQ(test::waitOverstep(sim, 20), 0) << test::slurp(dir_.file("sim.err"));
+  ASSERT_EQ(code, 0) << test::slurp(dir_.file("replay.err"));
+  const json r = parse(dir_.file("replay.json"));
+  EXPECT_EQ(r["state"], "finished");
+  EXPECT_TRUE(r["stabilizer"].get<bool>());
+  EXPECT_NEAR(r["executed_duration"].get<double>(), plan_.duration(), 0.011);
+  // The simulated robot tracks the plan and stays balanced on both feet.
+  EXPECT_LT(r["tracking_rms"].get<double>(), 0.01);
+  EXPECT_LT(r["cop_max"]["right"].get<double>(), 0.03);
+  EXPECT_LT(r["cop_max"]["left"].get<double>(), 0.03);
+  EXPECT_EQ(r["dropped_states"], 0);
+  const json s = parse(dir_.file("sim.json"));
+  EXPECT_FALSE(s["fell"].get<bool>());
+  EXPECT_EQ(s["rejected_commands"], 0);
+}
+
+TEST_F(ReplayLcm, LcmClockIsPacedByTheSimulatorsStates) {
+  const pid_t sim = test::spawnOverstep("sim --realtime --no-obstacle", dir_.file("sim.out"),
+                                        dir_.file("sim.err"));
+  const pid_t replay = test::spawnOverstep(
+      "replay " + plan_file_ + " --clock lcm --start --json --quiet --linger 0.2",
+      dir_.file("replay.json"), dir_.file("replay.err"));
+  const int code = test::waitOverstep(replay, 120);
+  kill(sim, SIGTERM);
+  test::waitOverstep(sim, 20);
+  ASSERT_EQ(code, 0) << test::slurp(dir_.file("replay.err"));
+  const json r = parse(dir_.file("replay.json"));
+  EXPECT_EQ(r["state"], "finished");
+  EXPECT_EQ(r["clock"], "lcm");
+  // One tick per state at the simulator's 200 Hz: the period is the robot's, 5 ms on average.
+  EXPECT_NEAR(r["period_us"]["mean"].get<double>(), 5000.0, 500.0);
+}
+
+TEST_F(ReplayLcm, KillingTheSimulatorHoldsWithinThreePeriods) {
+  lcm::LCM bus(std::getenv("LCM_DEFAULT_URL"));
+  ASSERT_TRUE(bus.good());
+  Listener l;
+  l.attach(bus);
+  const pid_t sim = test::spawnOverstep("sim --realtime --no-obstacle", dir_.file("sim.out"),
+                                        dir_.file("sim.err"));
+  const pid_t replay = test::spawnOverstep(
+      "replay " + plan_file_ + " --clock timer --start --json --quiet --linger 0.3",
+      dir_.file("replay.json"), dir_.file("replay.err"));
+  // Wait until the replay is running (status at 10 Hz), then kill the simulator outright.
+  bool running = false;
+  for (int i = 0; i < 600 && !running; ++i) {
+    bus.handleTimeout(50);
+    running =
+        !l.status.empty() && l.status.back().state == overstep::runtime_status_t::STATE_RUNNING;
+  }
+  ASSERT_TRUE(running) << test::slurp(dir_.file("replay.err"));
+  kill(sim, SIGKILL);
+  test::waitOverstep(sim, 10);
+  const auto t0 = std::chrono::steady_clock::now();
+  while (std::chrono::steady_clock::now() - t0 < std::chrono::seconds(2)) bus.handleTimeout(20);
+  const int code = test::waitOverstep(replay, 30);
+  EXPECT_EQ(code, 4) << test::slurp(dir_.file("replay.err"));
+  const json r = parse(dir_.file("replay.json"));
+  EXPECT_EQ(r["state"], "hold");
+  EXPECT_NE(r["fault"].get<std::string>().find("no robot state"), std::string::npos);
+  EXPECT_EQ(r["hold_missed_periods"], 3);
+  // The reason went out on the status channel.
+  bool published = false;
+  for (const auto& s : l.status)
+    published = published || (s.state == overstep::runtime_status_t::STATE_HOLD &&
+                              s.fault_reason.find("no robot state") != std::string::npos);
+  EXPECT_TRUE(published);
+}
+
+TEST_F(ReplayLcm, PauseResumeAndStopOverTheControlChannel) {
+  core::Plan longer = test::standingPlan(*model_, 6.0);
+  const std::string file = dir_.file("long.json");
+  core::savePlan(longer, file);
+  lcm::LCM bus(std::getenv("LCM_DEFAULT_URL"));
+  ASSERT_TRUE(bus.good());
+  Listener l;
+  l.attach(bus);
+  const pid_t replay =
+      test::spawnOverstep("replay " + file + " --clock lockstep --json --quiet --linger 0.2",
+                          dir_.file("replay.json"), dir_.file("replay.err"));
+  const pid_t sim = test::spawnOverstep("sim --lockstep --no-obstacle", dir_.file("sim.out"),
+                                        dir_.file("sim.err"));
+  auto send = [&](std::int8_t c) {
+    overstep::replay_control_t m{};
+    m.command = c;
+    bus.publish("OVERSTEP_REPLAY_CONTROL", &m);
+  };
+  auto pump = [&](double seconds) {
+    const auto t0 = std::chrono::steady_clock::now();
+    while (std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() < seconds)
+      bus.handleTimeout(10);
+  };
+  pump(1.0);
+  EXPECT_EQ(l.commands, 0) << "commands sent before START";
+  send(overstep::replay_control_t::START);
+  for (int i = 0; i < 400 && (l.plan_time.empty() || l.plan_time.back() < 0.5); ++i) pump(0.05);
+  ASSERT_FALSE(l.plan_time.empty());
+  send(overstep::replay_control_t::PAUSE);
+  pump(0.5);
+  const std::size_t n0 = l.plan_time.size();
+  pump(0.5);
+  ASSERT_GT(l.plan_time.size(), n0 + 10) << "the loop keeps running while paused";
+  EXPECT_EQ(l.plan_time.back(), l.plan_time[n0]) << "plan time frozen while paused";
+  send(overstep::replay_control_t::RESUME);
+  pump(0.5);
+  EXPECT_GT(l.plan_time.back(), l.plan_time[n0]);
+  send(overstep::replay_control_t::STOP);
+  const int code = test::waitOverstep(replay, 30);
+  kill(sim, SIGTERM);
+  test::waitOverstep(sim, 10);
+  EXPECT_EQ(code, 4);
+  const json r = parse(dir_.file("replay.json"));
+  EXPECT_EQ(r["fault"], "stopped by the operator");
+}
+
+TEST_F(ReplayLcm, DroppedAndDelayedStatesAreCountedAndTheRunStaysSafe) {
+  // A stand-in robot: perfect states of the plan's first sample at 200 Hz, 10 % of them dropped
+  // (seeded), every one delivered 20 ms late; it reports the last command it received.
+  const pid_t replay = test::spawnOverstep(
+      "replay " + plan_file_ + " --clock timer --start --json --quiet --linger 0.2",
+      dir_.file("replay.json"), dir_.file("replay.err"));
+  lcm::LCM bus(std::getenv("LCM_DEFAULT_URL"));
+  ASSERT_TRUE(bus.good());
+  std::int64_t last_cmd = -1;
+  struct OnCmd {
+    std::int64_t* last;
+    void on(const lcm::ReceiveBuffer*, const std::string&, const overstep::robot_command_t* m) {
+      *last = std::max(*last, m->seq);
+    }
+  } on_cmd{&last_cmd};
+  bus.subscribe("OVERSTEP_COMMAND", &OnCmd::on, &on_cmd)->setQueueCapacity(10000);
+  core::RobotState st = test::perfectState(*model_, plan_, 0);
+  std::mt19937 rng(7);
+  std::bernoulli_distribution drop(0.10);
+  std::deque<std::pair<std::chrono::steady_clock::time_point, overstep::robot_state_t>> queue;
+  int dropped = 0, sent = 0;
+  std::int64_t seq = 0;
+  auto next = std::chrono::steady_clock::now();
+  int status = 0;
+  while (waitpid(replay, &status, WNOHANG) == 0) {
+    next += std::chrono::milliseconds(5);
+    std::this_thread::sleep_until(next);
+    while (bus.handleTimeout(0) > 0) {
+    }
+    st.seq = seq++;
+    st.utime = static_cast<std::int64_t>(seq * 5000);
+    st.last_command_seq = last_cmd;
+    if (drop(rng)) {
+      ++dropped;
+    } else {
+      overstep::robot_state_t m;
+      msgs::toLcm(st, m);
+      queue.emplace_back(next + std::chrono::milliseconds(20), m);
+    }
+    while (!queue.empty() && queue.front().first <= std::chrono::steady_clock::now()) {
+      bus.publish("OVERSTEP_STATE", &queue.front().second);
+      queue.pop_front();
+      ++sent;
+    }
+    ASSERT_LT(seq, 200 * 60) << "the replay did not end";
+  }
+  const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  const json r = parse(dir_.file("replay.json"));
+  ASSERT_TRUE(r.is_object()) << test::slurp(dir_.file("replay.err"));
+  // Every gap in the sequence numbers the runtime saw is counted (the last few queued states
+  // may not have been sent before it exited).
+  EXPECT_GE(r["dropped_states"].get<int>(), dropped - 3);
+  EXPECT_LE(r["dropped_states"].get<int>(), dropped);
+  // 20 ms is four periods of round trip: nearly every state is late.
+  EXPECT_GT(r["late_states"].get<int>(), sent / 2);
+  EXPECT_GT(r["round_trip_us"]["mean"].get<double>(), 15000.0);
+  // Completes, or holds safely on the watchdog (three drops in a row).
+  const bool finished = code == 0 && r["state"] == "finished";
+  const bool held = code == 4 && r["state"] == "hold" &&
+                    r["fault"].get<std::string>().find("no robot state") != std::string::npos;
+  EXPECT_TRUE(finished || held) << r.dump();
+}
+
+TEST_F(ReplayLcm, BadInputIsRefusedBeforeAnythingIsSent) {
+  lcm::LCM bus(std::getenv("LCM_DEFAULT_URL"));
+  ASSERT_TRUE(bus.good());
+  Listener l;
+  l.attach(bus);
+  core::Plan other = plan_;
+  other.robot_hash = "00000000deadbeef";
+  core::savePlan(other, dir_.file("other.json"));
+  test::writeText(dir_.file("corrupt.json"), "{\"format\": \"overstep-plan\", \"version\": 1, ");
+  struct Case {
+    std::string args, needle;
+  };
+  const std::vector<Case> cases = {
+      {"replay " + dir_.file("other.json") + " --start", "hash"},
+      {"replay " + dir_.file("corrupt.json") + " --start", "corrupt.json"},
+      {"replay " + dir_.file("missing.json") + " --start", "missing.json"},
+      {"replay " + plan_file_ + " --start --clock sundial", "unknown clock"},
+      {"replay " + plan_file_ + " --start --rate 5000", "--rate"},
+  };
+  for (const auto& c : cases) {
+    const auto res = test::runOverstep(c.args);
+    EXPECT_EQ(res.code, 2) << c.args << "\n" << res.err;
+    EXPECT_NE(res.err.find(c.needle), std::string::npos) << res.err;
+    EXPECT_EQ(std::count(res.err.begin(), res.err.end(), '\n'), 1) << res.err;
+  }
+  for (int i = 0; i < 20; ++i) bus.handleTimeout(10);
+  EXPECT_EQ(l.commands, 0);
+}
+
+}  // namespace
+}  // namespace overstep
