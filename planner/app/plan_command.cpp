@@ -14,6 +14,7 @@
 #include "overstep/core/plan.hpp"
 #include "overstep/planner/check.hpp"
 #include "overstep/planner/solver.hpp"
+#include "overstep/planner/standing.hpp"
 #include "overstep/robots/whole_body_model.hpp"
 
 namespace overstep {
@@ -31,7 +32,26 @@ struct PlanOptions {
   double height = 0.20, width = 0.11, gap = 0.03, margin = 0.0, time_limit = 0.0, rate = 200.0;
   int threads = 0;
   bool json = false;
+  double stand = 0.0;  ///< > 0: write a static standing plan of this duration instead of solving
 };
+
+int runStand(const PlanOptions& o) {
+  robots::WholeBodyModel model = robots::WholeBodyModel::fromFile(o.robot);
+  const core::Plan plan = planner::standingPlan(model, o.stand, o.rate);
+  core::savePlan(plan, o.out);
+  if (o.json) {
+    nlohmann::json j;
+    j["status"] = "standing";
+    j["valid"] = true;
+    j["duration"] = plan.duration();
+    j["file"] = o.out;
+    std::cout << j.dump(2) << "\n";
+  } else {
+    std::cerr << "standing plan: " << plan.duration() << " s, " << plan.samples() << " samples -> "
+              << o.out << "\n";
+  }
+  return kExitOk;
+}
 
 std::string failedPath(const std::string& out) {
   std::filesystem::path p(out);
@@ -40,6 +60,7 @@ std::string failedPath(const std::string& out) {
 }
 
 int runPlan(const PlanOptions& o) {
+  if (o.stand != 0.0) return runStand(o);
   core::ObstacleSpec ob;
   ob.shape = core::parseObstacleShape(o.shape);
   ob.height = o.height;
@@ -217,6 +238,8 @@ void registerPlanCommands(CLI::App& app, cli::Registry& registry) {
   plan->add_option("--time-limit", po->time_limit,
                    "Seconds for the whole solve (default from config)");
   plan->add_option("--rate", po->rate, "Sample rate of the plan file, Hz")->capture_default_str();
+  plan->add_option("--stand", po->stand,
+                   "Write a static standing plan of this many seconds instead (runtime bring-up)");
   plan->add_flag("--json", po->json,
                  "Print the summary as one JSON object on stdout (progress on stderr)");
   plan->footer(

@@ -59,11 +59,6 @@ void OverstepProblem::bounds(Eigen::VectorXd& lo, Eigen::VectorXd& hi) const {
     const auto& a = d.actuated[static_cast<std::size_t>(m.leg_act[static_cast<std::size_t>(j)])];
     lo.segment(lay.legs + j * lay.free_cp, lay.free_cp).setConstant(a.safeLower());
     hi.segment(lay.legs + j * lay.free_cp, lay.free_cp).setConstant(a.safeUpper());
-    // The motion starts from the robot's static half-sitting posture (the tied first control
-    // points): a replay then begins where the robot stands. A joint-space move between two
-    // double-support postures is not a motion the closed leg chain can make (docs/runtime.md).
-    const double rest = m.q_rest(m.leg_coord[static_cast<std::size_t>(j)]);
-    lo(lay.legs + j * lay.free_cp) = hi(lay.legs + j * lay.free_cp) = rest;
   }
   lo.segment(lay.flex, 4 * lay.free_cp).setConstant(-0.15);
   hi.segment(lay.flex, 4 * lay.free_cp).setConstant(0.15);

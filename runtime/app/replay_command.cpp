@@ -140,6 +140,7 @@ class ReplayProcess {
         replay_.stop();
         interrupted_ = true;
       }
+      replay_.prepare();  // between ticks: plans the move to the start once it is requested
       const double tick_start = nowSeconds();
       const runtime::TickOutput& out = replay_.tick(st);
       if (out.state == runtime::State::Hold && hold_missed_ < 0)

@@ -178,6 +178,102 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
     }
   }
   if (N > 1) zmp_vel_.col(0) = zmp_vel_.col(1);
+  model_ = std::make_unique<robots::WholeBodyModel>(model);
+  q0_ = plan.q.col(0);
+  sole_frame_[0] = sole[0];
+  sole_frame_[1] = sole[1];
+  sensor_frame_[0] = sensor[0];
+  sensor_frame_[1] = sensor[1];
+}
+
+PlanTrack::~PlanTrack() = default;
+
+bool PlanTrack::planMove(const Eigen::VectorXd& q_now, int samples, Eigen::MatrixXd& out) const {
+  robots::WholeBodyModel& m = *model_;
+  const int nA = joints_;
+  if (q_now.size() != nA || samples < 2) return false;
+  out.resize(nA, samples);
+  const Eigen::VectorXd q_to = q0_.segment(m.actuatedCoordinate(0), nA);
+  const bool both = contact_[0][0] && contact_[0][1];
+  // Feet where the plan's first sample has them; the base pose now from the measured joints
+  // with the anchor (left if loaded) sole there.
+  const int anchor = contact_[0][1] ? 1 : 0;
+  Eigen::Isometry3d soles[2];
+  m.setPositions(q0_);
+  for (int f = 0; f < 2; ++f) soles[f] = m.framePose(sole_frame_[f]);
+  const Eigen::Isometry3d base_to = m.framePose(m.frameIndex(m.description().base_link));
+  Eigen::VectorXd q = q0_, v = Eigen::VectorXd::Zero(q0_.size()), a = v;
+  q.segment(m.actuatedCoordinate(0), nA) = q_now;
+  m.anchorBase(sole_frame_[anchor], soles[anchor], q, v, a);
+  const Eigen::Isometry3d base_from = m.framePose(m.frameIndex(m.description().base_link));
+  const Eigen::Quaterniond r_from(base_from.linear()), r_to(base_to.linear());
+  // Each leg is solved for its ankle link (the F/T sensor frame, above the bushing, at the
+  // bushing's centre): from where the measured joints put it to where the plan's first sample
+  // has it. The bushings take the change of orientation between the ankle and the flat foot,
+  // so the move starts exactly at the measured joints whatever the bushings' deflection.
+  Eigen::Isometry3d ankle_from[2], ankle_to[2];
+  for (int f = 0; f < 2; ++f) ankle_from[f] = m.framePose(sensor_frame_[f]);
+  m.setPositions(q0_);
+  for (int f = 0; f < 2; ++f) ankle_to[f] = m.framePose(sensor_frame_[f]);
+  // The ankles (bushing centres) sit on the feet: if the measured joints put the other one more
+  // than 2 mm from where the plan's start has it, the robot does not stand on the plan's start
+  // placements, and no motion in double support can get it there.
+  if (both &&
+      (ankle_from[1 - anchor].translation() - ankle_to[1 - anchor].translation()).norm() > 2e-3)
+    return false;
+  const int base_frame = m.frameIndex(m.description().base_link);
+  for (int k = 0; k < samples; ++k) {
+    const double u = static_cast<double>(k) / (samples - 1);
+    const double b = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
+    Eigen::VectorXd qa = q_now + b * (q_to - q_now);
+    if (both) {
+      // Base at the interpolated pose (set through the anchor closure of the previous solution),
+      // then each leg solved onto its sole.
+      Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
+      base.linear() = r_from.slerp(b, r_to).toRotationMatrix();
+      base.translation() = (1.0 - b) * base_from.translation() + b * base_to.translation();
+      for (int f = 0; f < 2; ++f) {
+        const auto& leg = leg_[static_cast<std::size_t>(f)];
+        Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
+        target.linear() = Eigen::Quaterniond(ankle_from[f].linear())
+                              .slerp(b, Eigen::Quaterniond(ankle_to[f].linear()))
+                              .toRotationMatrix();
+        target.translation() =
+            (1.0 - b) * ankle_from[f].translation() + b * ankle_to[f].translation();
+        if (k > 0)
+          for (int i = 0; i < 6; ++i) qa(leg[std::size_t(i)]) = out(leg[std::size_t(i)], k - 1);
+        for (int it = 0; it < 50; ++it) {
+          q.segment(m.actuatedCoordinate(0), nA) = qa;
+          m.anchorBase(base_frame, base, q, v, a);
+          const Eigen::Isometry3d X = m.framePose(sensor_frame_[f]);
+          core::Vector6d e;
+          const Eigen::AngleAxisd aa(target.linear() * X.linear().transpose());
+          e.head<3>() = aa.axis() * aa.angle();
+          e.tail<3>() = target.translation() - X.translation();
+          if (e.norm() < 1e-10) break;
+          const Eigen::MatrixXd J = m.frameJacobian(sensor_frame_[f]);
+          Matrix6d Jl;
+          for (int i = 0; i < 6; ++i) Jl.col(i) = J.col(m.actuatedCoordinate(leg[std::size_t(i)]));
+          const core::Vector6d dq =
+              (Jl.transpose() * Jl + 1e-8 * Matrix6d::Identity()).ldlt().solve(Jl.transpose() * e);
+          for (int i = 0; i < 6; ++i) qa(leg[std::size_t(i)]) += dq(i);
+          if (it == 49) return false;
+        }
+        for (int i = 0; i < 6; ++i) {
+          const int j = leg[std::size_t(i)];
+          if (qa(j) < lower_(j) || qa(j) > upper_(j)) return false;
+        }
+      }
+    }
+    // The last point is the plan's own first posture (the solution differs by the IK's
+    // tolerance only: ~1e-6 rad).
+    if (k == samples - 1) {
+      if ((qa - q_to).cwiseAbs().maxCoeff() > 1e-3) return false;
+      qa = q_to;
+    }
+    out.col(k) = qa;
+  }
+  return true;
 }
 
 const std::string& PlanTrack::phaseName(int phase) const {

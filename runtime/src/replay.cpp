@@ -43,6 +43,8 @@ const char* toString(FaultReason r) {
       return "stabilizer fault";
     case FaultReason::Stopped:
       return "stopped by the operator";
+    case FaultReason::StartUnreachable:
+      return "the robot does not stand where the plan starts (no safe move to it)";
   }
   return "unknown";
 }
@@ -66,6 +68,26 @@ Replay::Replay(const PlanTrack& track, const stabilizer::Params& params,
 }
 
 void Replay::start() { start_requested_ = true; }
+
+bool Replay::prepare() {
+  if (!start_requested_ || !have_state_ || move_ready_ || out_.state != State::Idle) return false;
+  move_from_ = last_state_.q;
+  double T = opt_.min_move_time;
+  const TrackSample first = track_.makeSample();
+  for (int j = 0; j < track_.joints(); ++j) {
+    const double dist = std::abs(first.q(j) - move_from_(j));
+    // A quintic blend peaks at 15/8 of the mean speed.
+    T = std::max(T, 1.875 * dist / (opt_.move_speed * track_.velocityLimit()(j)));
+  }
+  move_T_ = T;
+  const int samples = static_cast<int>(std::ceil(T * opt_.rate)) + 1;
+  if (!track_.planMove(move_from_, samples, move_)) {
+    enterHold(FaultReason::StartUnreachable);
+    return true;
+  }
+  move_ready_ = true;
+  return true;
+}
 
 void Replay::pause() {
   if (out_.state == State::Running) out_.state = State::Paused;
@@ -126,22 +148,13 @@ const TickOutput& Replay::tick(const core::RobotState* state) {
 
   switch (out_.state) {
     case State::Idle:
-      if (start_requested_ && have_state_) {
-        move_from_ = last_state_.q;
-        double T = opt_.min_move_time;
-        for (int j = 0; j < track_.joints(); ++j) {
-          const double dist = std::abs(out_.sample.q(j) - move_from_(j));
-          // A quintic blend peaks at 15/8 of the mean speed.
-          T = std::max(T, 1.875 * dist / (opt_.move_speed * track_.velocityLimit()(j)));
-        }
-        move_T_ = T;
-        move_t_ = 0.0;
+      if (move_ready_) {
+        move_k_ = 0;
         out_.state = State::MovingToStart;
       }
       break;
     case State::MovingToStart:
-      move_t_ += dt;
-      if (move_t_ >= move_T_) {
+      if (++move_k_ >= move_.cols() - 1) {
         out_.state = State::Running;
         plan_time_ = 0.0;
         if (opt_.stabilizer) {
@@ -194,11 +207,10 @@ void Replay::commandFromReference(bool with_stabilizer, double dt) {
       c.qd_ref = qd_zero_;
       break;
     case State::MovingToStart: {
-      const double u = std::clamp(move_t_ / move_T_, 0.0, 1.0);
-      const double b = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
-      const double bd = 30.0 * u * u * (1.0 - u) * (1.0 - u) / move_T_;
-      c.q_ref = move_from_ + b * (s.q - move_from_);
-      c.qd_ref = bd * (s.q - move_from_);
+      const int last = static_cast<int>(move_.cols()) - 1;
+      const int k = std::min(move_k_, last), k1 = std::min(move_k_ + 1, last);
+      c.q_ref = move_.col(k);
+      c.qd_ref = (move_.col(k1) - move_.col(k)) * opt_.rate;
       break;
     }
     case State::Running:

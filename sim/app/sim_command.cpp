@@ -79,7 +79,8 @@ class SimProcess {
         sim_(model, truth, simOptions(o)),
         noise_(o.seed, o.noise),
         lcm_(o.lcm_url),
-        joints_(model.actuatedCount()) {
+        joints_(model.actuatedCount()),
+        model_desc_(model.description()) {
     if (!lcm_.good()) throw InputError("cannot open LCM at '" + o.lcm_url + "'");
     auto* sub = lcm_.subscribe("OVERSTEP_COMMAND", &SimProcess::onCommand, this);
     sub->setQueueCapacity(1000);  // drain everything; the newest valid command wins
@@ -150,6 +151,21 @@ class SimProcess {
     summary_["fell"] = fell_;
     summary_["obstacle_contact"] = obstacle_contact_;
     summary_["states_published"] = state_seq_;
+    // Ground truth at the end, for verdicts (never published on the bus).
+    const auto& d = model_desc_;
+    for (const char* side : {"right", "left"}) {
+      const Eigen::Isometry3d X = sim_.framePose(d.foot(side)->sole_frame);
+      const core::FootDescription* fd = d.foot(side);
+      summary_[std::string(side) + "_sole"] = {X.translation().x(), X.translation().y(),
+                                               X.translation().z()};
+      // Heel (back edge) x: what must be beyond the bar for the foot to have cleared it.
+      summary_[std::string(side) + "_heel_x"] =
+          (X * Eigen::Vector3d(-fd->sole.x_back, 0.0, 0.0)).x();
+    }
+    summary_["base_height"] = sim_.basePose().translation().z();
+    summary_["base_speed"] = sim_.baseSpeed();
+    summary_["obstacle_x"] = {sim_.obstacleRangeX()[0], sim_.obstacleRangeX()[1]};
+    summary_["has_obstacle"] = !o_.no_obstacle;
     if (o_.json)
       std::cout << summary_.dump(2) << "\n";
     else
@@ -259,6 +275,7 @@ class SimProcess {
   double last_command_sim_ = 0.0, rtf_ = 0.0;
   std::chrono::steady_clock::time_point last_command_wall_ = std::chrono::steady_clock::now();
   nlohmann::json summary_;
+  core::RobotDescription model_desc_;
 };
 
 int runSim(const SimCliOptions& o) {

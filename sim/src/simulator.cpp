@@ -350,6 +350,22 @@ double Simulator::massBelowSensor(int foot) const {
 
 Eigen::Isometry3d Simulator::basePose() const { return impl_->base->getWorldTransform(); }
 
+Eigen::Isometry3d Simulator::framePose(const std::string& frame) const {
+  Impl& s = *impl_;
+  s.model.skeleton()->setPositions(s.robot->getPositions());
+  return s.model.framePose(s.model.frameIndex(frame));
+}
+
+double Simulator::baseSpeed() const { return impl_->base->getLinearVelocity().norm(); }
+
+std::array<double, 2> Simulator::obstacleRangeX() const {
+  const Impl& s = *impl_;
+  if (!s.has_obstacle) return {0.0, 0.0};
+  const double half = s.obstacle.shape == core::ObstacleSpec::Shape::Box ? 0.5 * s.obstacle.size.x()
+                                                                         : s.obstacle.radius;
+  return {s.obstacle.centre.x() - half, s.obstacle.centre.x() + half};
+}
+
 Eigen::Vector3d Simulator::com() const { return impl_->robot->getCOM(); }
 
 CollisionStatus Simulator::collisions() const {

@@ -39,6 +39,7 @@ LoopResult runLoop(const core::Plan& plan, const stabilizer::Params& params, boo
   const int steps = static_cast<int>(std::lround(1.0 / (ro.rate * so.dt)));
   for (int i = 0; i < 200 * 30 && r.state != runtime::State::Hold; ++i) {
     const core::RobotState st = sim.state();
+    replay.prepare();
     const runtime::TickOutput& o = replay.tick(&st);
     r.state = o.state;
     const bool executing =

@@ -189,6 +189,12 @@ TEST_F(RuntimeTest, EstimatorRotatesTheCoMWithTheImuTilt) {
   EXPECT_NEAR(m.com.x() - s.ref.com.x(), tilt * h, 2e-4);
 }
 
+/// One control period as the replay process runs it: the between-ticks work, then the tick.
+const runtime::TickOutput& tickP(runtime::Replay& r, const core::RobotState* st) {
+  r.prepare();
+  return r.tick(st);
+}
+
 runtime::ReplayOptions fastOptions() {
   runtime::ReplayOptions o;
   o.rate = 200.0;
@@ -201,14 +207,14 @@ TEST_F(RuntimeTest, LifecycleRunsThePlanToTheEnd) {
   runtime::Replay r(track, params(), fastOptions());
   core::RobotState st = perfectState(*plan_, 0);
   // Idle without a state: nothing is sent; with a state but no start: still nothing.
-  EXPECT_FALSE(r.tick(nullptr).send_command);
+  EXPECT_FALSE(tickP(r, nullptr).send_command);
   EXPECT_EQ(r.state(), State::Idle);
-  EXPECT_FALSE(r.tick(&st).send_command);
+  EXPECT_FALSE(tickP(r, &st).send_command);
   r.start();
   int ticks = 0, moving = 0;
   std::int64_t last_seq = -1;
   while (r.state() != State::Finished && ticks < 2000) {
-    const auto& out = r.tick(&st);
+    const auto& out = tickP(r, &st);
     if (out.state == State::MovingToStart) ++moving;
     ASSERT_TRUE(out.send_command);
     EXPECT_GT(out.command.seq, last_seq);
@@ -222,24 +228,58 @@ TEST_F(RuntimeTest, LifecycleRunsThePlanToTheEnd) {
   EXPECT_LT((r.output().command.q_ref - track.makeSample().q).norm(), 1e-3);
 }
 
-TEST_F(RuntimeTest, MoveToStartIsSmoothAndWithinVelocityLimits) {
+TEST_F(RuntimeTest, MoveToStartKeepsTheFeetAndTheLimits) {
+  // The robot stands on the plan's start placements but in half-sitting (the plan leans its
+  // legs) with its arms 0.05 rad away: the move must be smooth, within the velocity limits, and
+  // keep the soles' relative pose fixed all the way (the closed chain of double support).
   runtime::PlanTrack track(*plan_, *model_);
   runtime::Replay r(track, params(), fastOptions());
   core::RobotState st = perfectState(*plan_, 0);
-  st.q += Eigen::VectorXd::Constant(st.q.size(), 0.05);  // start 0.05 rad away on every joint
+  st.q = model_->halfSitting().segment(6, track.joints());
+  for (int j = 12; j < track.joints(); ++j) st.q(j) += 0.05;
+  const auto& d = model_->description();
+  const int rs = model_->frameIndex(d.foot("right")->sole_frame);
+  const int ls = model_->frameIndex(d.foot("left")->sole_frame);
+  auto rightInLeft = [&](const Eigen::VectorXd& qa) {
+    Eigen::VectorXd q = plan_->q.col(0);
+    q.segment(6, track.joints()) = qa;
+    model_->setPositions(q);
+    return Eigen::Isometry3d(model_->framePose(ls).inverse() * model_->framePose(rs));
+  };
+  const Eigen::Isometry3d X0 = rightInLeft(track.makeSample().q);
   r.start();
   Eigen::VectorXd prev = st.q;
-  double max_rate = 0.0;
-  for (int i = 0; i < 400 && r.state() != State::Running; ++i) {
-    const auto& out = r.tick(&st);
+  double max_rate = 0.0, max_foot_error = 0.0;
+  int moving = 0;
+  for (int i = 0; i < 2000 && r.state() != State::Running; ++i) {
+    const auto& out = tickP(r, &st);
+    if (out.state != State::MovingToStart) continue;
+    ++moving;
     for (int j = 0; j < st.q.size(); ++j)
       max_rate = std::max(
           max_rate, std::abs(out.command.q_ref(j) - prev(j)) * 200.0 / track.velocityLimit()(j));
     prev = out.command.q_ref;
+    const Eigen::Isometry3d X = rightInLeft(out.command.q_ref);
+    max_foot_error = std::max(max_foot_error, (X.translation() - X0.translation()).norm());
   }
-  EXPECT_EQ(r.state(), State::Running);
+  EXPECT_EQ(r.state(), State::Running) << runtime::toString(r.fault());
+  EXPECT_GT(moving, 10);
   EXPECT_LT(max_rate, runtime::ReplayOptions{}.move_speed + 1e-6);
-  EXPECT_LT((prev - track.makeSample().q).norm(), 1e-6);
+  EXPECT_LT(max_foot_error, 1e-6) << "the feet moved relative to each other during the move";
+  // The last moving tick is one step of the quintic's flat end before the plan's first sample.
+  EXPECT_LT((prev - track.makeSample().q).norm(), 1e-4);
+}
+
+TEST_F(RuntimeTest, StartFromAnotherStanceIsRefused) {
+  // Every joint 0.05 rad away: the feet are not on the plan's start placements.
+  runtime::PlanTrack track(*plan_, *model_);
+  runtime::Replay r(track, params(), fastOptions());
+  core::RobotState st = perfectState(*plan_, 0);
+  st.q += Eigen::VectorXd::Constant(st.q.size(), 0.05);
+  r.start();
+  for (int i = 0; i < 5; ++i) tickP(r, &st);
+  EXPECT_EQ(r.state(), State::Hold);
+  EXPECT_EQ(r.fault(), FaultReason::StartUnreachable);
 }
 
 TEST_F(RuntimeTest, WatchdogHoldsAfterThreeMissedPeriods) {
@@ -247,17 +287,17 @@ TEST_F(RuntimeTest, WatchdogHoldsAfterThreeMissedPeriods) {
   runtime::Replay r(track, params(), fastOptions());
   core::RobotState st = perfectState(*plan_, 0);
   r.start();
-  for (int i = 0; i < 60; ++i) r.tick(&st);
+  for (int i = 0; i < 60; ++i) tickP(r, &st);
   ASSERT_EQ(r.state(), State::Running);
-  r.tick(nullptr);
-  r.tick(nullptr);
+  tickP(r, nullptr);
+  tickP(r, nullptr);
   EXPECT_EQ(r.state(), State::Running);
-  const auto& out = r.tick(nullptr);
+  const auto& out = tickP(r, nullptr);
   EXPECT_EQ(out.state, State::Hold);
   EXPECT_EQ(out.fault, FaultReason::NoState);
   // Holding: the command stays finite and still goes out; a late state does not resume.
   EXPECT_TRUE(out.command.q_ref.allFinite());
-  r.tick(&st);
+  tickP(r, &st);
   EXPECT_EQ(r.state(), State::Hold);
   EXPECT_EQ(r.fault(), FaultReason::NoState);
 }
@@ -281,10 +321,10 @@ TEST_F(RuntimeTest, BadStatesFaultAndHold) {
   for (const auto& c : cases) {
     runtime::Replay r(track, params(), fastOptions());
     r.start();
-    for (int i = 0; i < 50; ++i) r.tick(&good);
+    for (int i = 0; i < 50; ++i) tickP(r, &good);
     core::RobotState bad = good;
     c.corrupt(bad);
-    const auto& out = r.tick(&bad);
+    const auto& out = tickP(r, &bad);
     EXPECT_EQ(out.state, State::Hold) << c.name;
     EXPECT_EQ(out.fault, c.expect) << c.name;
     EXPECT_TRUE(out.command.q_ref.allFinite()) << c.name;
@@ -296,20 +336,20 @@ TEST_F(RuntimeTest, PauseResumeStop) {
   runtime::Replay r(track, params(), fastOptions());
   const core::RobotState st = perfectState(*plan_, 0);
   r.start();
-  while (r.state() != State::Running) r.tick(&st);
-  for (int i = 0; i < 20; ++i) r.tick(&st);
+  while (r.state() != State::Running) tickP(r, &st);
+  for (int i = 0; i < 20; ++i) tickP(r, &st);
   r.pause();
-  const double t_pause = r.tick(&st).plan_time;
-  for (int i = 0; i < 30; ++i) EXPECT_EQ(r.tick(&st).plan_time, t_pause);
+  const double t_pause = tickP(r, &st).plan_time;
+  for (int i = 0; i < 30; ++i) EXPECT_EQ(tickP(r, &st).plan_time, t_pause);
   EXPECT_EQ(r.state(), State::Paused);
   r.resume();
-  EXPECT_GT(r.tick(&st).plan_time, t_pause);
+  EXPECT_GT(tickP(r, &st).plan_time, t_pause);
   r.stop();
-  const auto& out = r.tick(&st);
+  const auto& out = tickP(r, &st);
   EXPECT_EQ(out.state, State::Hold);
   EXPECT_EQ(out.fault, FaultReason::Stopped);
   // The stabilizer ramps out: after its ramp time it is off and the command is the frozen sample.
-  for (int i = 0; i < 400; ++i) r.tick(&st);
+  for (int i = 0; i < 400; ++i) tickP(r, &st);
   EXPECT_EQ(r.output().stab_status.mode, stabilizer::Mode::Off);
 }
 
@@ -320,11 +360,11 @@ TEST_F(RuntimeTest, CommandsStayInsideLimitsWhateverTheCorrection) {
   runtime::Replay r(track, params(), fastOptions());
   core::RobotState st = perfectState(*plan_, 0);
   r.start();
-  while (r.state() != State::Running) r.tick(&st);
+  while (r.state() != State::Running) tickP(r, &st);
   st.imu_orientation = Eigen::AngleAxisd(0.08, Eigen::Vector3d::UnitY()) * st.imu_orientation;
   Eigen::VectorXd prev = r.output().command.q_ref;
   for (int i = 0; i < 300; ++i) {
-    const auto& out = r.tick(&st);
+    const auto& out = tickP(r, &st);
     for (int j = 0; j < st.q.size(); ++j) {
       EXPECT_GE(out.command.q_ref(j), track.lower()(j));
       EXPECT_LE(out.command.q_ref(j), track.upper()(j));

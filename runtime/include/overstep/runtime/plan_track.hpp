@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,9 @@ class PlanTrack {
   /// range, contact in every phase) and precomputes the per-sample data. InputError with a
   /// one-line reason otherwise. Not real-time.
   PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model);
+  ~PlanTrack();
+  PlanTrack(const PlanTrack&) = delete;
+  PlanTrack& operator=(const PlanTrack&) = delete;
 
   int samples() const { return static_cast<int>(t_.size()); }
   int joints() const { return joints_; }
@@ -85,6 +89,16 @@ class PlanTrack {
   /// Sole-frame contact wrench [M; F] of foot f from its sensor reading (sensor frame [F; M]).
   core::Vector6d soleWrench(int index, int f, const core::Vector6d& ft) const;
 
+  /// Plans the move from the measured posture (actuated joints `q_now`) to the plan's first
+  /// sample over `samples` points (a quintic time law): the base pose relative to the feet and
+  /// the joints off the legs are interpolated and each leg's joints solved by inverse kinematics
+  /// so that both soles stay where the plan's first sample has them. (A joint-space blend between
+  /// two double-support postures moves the feet relative to each other, which the closed chain
+  /// turns into large internal forces: measured 6 cm of opposite CoP shifts, docs/runtime.md.)
+  /// Writes joints x samples into `out`. Not real-time (model, allocation): call outside the
+  /// tick. Returns false if a leg cannot reach (the move is then not safe to make).
+  bool planMove(const Eigen::VectorXd& q_now, int samples, Eigen::MatrixXd& out) const;
+
  private:
   int joints_ = 0;
   double duration_ = 0.0, rate_ = 200.0;
@@ -107,6 +121,10 @@ class PlanTrack {
   Eigen::MatrixXd below_com_[2];    ///< 3 x N, CoM of the bodies below each sensor
   double below_mass_[2] = {0.0, 0.0};
   double gravity_ = 9.81;
+  std::unique_ptr<robots::WholeBodyModel> model_;  ///< for planMove (not used in the tick)
+  Eigen::VectorXd q0_;                             ///< the plan's first sample (all coordinates)
+  int sole_frame_[2] = {-1, -1};
+  int sensor_frame_[2] = {-1, -1};  ///< F/T frames: on the ankle links, at the bushing centres
 };
 
 }  // namespace overstep::runtime

@@ -30,13 +30,14 @@ const char* toString(State s);
 
 enum class FaultReason : std::uint8_t {
   None = 0,
-  NoState,          ///< no robot state for watchdog_periods periods
-  NonFiniteState,   ///< NaN / infinity in the robot state
-  BadStateSize,     ///< wrong joint count
-  JointLimit,       ///< a measured joint beyond its mechanical limit
-  Fall,             ///< the robot (or simulator) reports a fall
-  StabilizerFault,  ///< the stabilizer latched a fault (CoM error, torso tilt, ...)
-  Stopped,          ///< operator stop
+  NoState,           ///< no robot state for watchdog_periods periods
+  NonFiniteState,    ///< NaN / infinity in the robot state
+  BadStateSize,      ///< wrong joint count
+  JointLimit,        ///< a measured joint beyond its mechanical limit
+  Fall,              ///< the robot (or simulator) reports a fall
+  StabilizerFault,   ///< the stabilizer latched a fault (CoM error, torso tilt, ...)
+  Stopped,           ///< operator stop
+  StartUnreachable,  ///< the robot does not stand where the plan starts (no safe move to it)
 };
 const char* toString(FaultReason r);
 
@@ -69,8 +70,13 @@ class Replay {
   /// The track must outlive the replay. Throws InputError for bad options or parameters.
   Replay(const PlanTrack& track, const stabilizer::Params& params, const ReplayOptions& options);
 
-  /// Idle -> MovingToStart once a state is known (or at the next tick with one).
+  /// Requests the start: once a state is known, prepare() plans the move to the plan's first
+  /// posture and the next tick begins it (Idle -> MovingToStart).
   void start();
+  /// Work that must not run in the tick (it allocates and uses the model): planning the move to
+  /// the start once it is requested and a state is known. Call it between ticks; returns true
+  /// when it did something. A move that cannot be made holds with StartUnreachable.
+  bool prepare();
   void pause();   ///< Running -> Paused (the reference stops; the stabilizer keeps balancing)
   void resume();  ///< Paused -> Running
   void stop();    ///< anything -> Hold (reason Stopped)
@@ -105,7 +111,10 @@ class Replay {
   int missed_ = 0;
   std::int64_t ticks_ = 0, seq_ = 0;
   double plan_time_ = 0.0;
-  double move_t_ = 0.0, move_T_ = 1.0;
+  double move_T_ = 1.0;
+  Eigen::MatrixXd move_;  ///< joints x samples, planned by prepare()
+  bool move_ready_ = false;
+  int move_k_ = 0;
   Eigen::VectorXd move_from_, q_hold_, q_prev_, qd_zero_;
   bool prev_valid_ = false;
   stabilizer::Measurement meas_;

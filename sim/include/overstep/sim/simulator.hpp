@@ -85,6 +85,12 @@ class Simulator {
   CollisionStatus collisions() const;
   /// Base (pelvis) pose in the world: ground truth.
   Eigen::Isometry3d basePose() const;
+  /// Ground truth: world pose of any model frame or link (e.g. a sole frame), linear speed of the
+  /// base. For verdicts and tests; nothing published depends on them.
+  Eigen::Isometry3d framePose(const std::string& frame) const;
+  double baseSpeed() const;
+  /// Extent of the obstacle envelope along x (world), {0, 0} without one.
+  std::array<double, 2> obstacleRangeX() const;
   /// Whole-body CoM in the world: ground truth.
   Eigen::Vector3d com() const;
   double totalMass() const;
