@@ -10,6 +10,7 @@ void registerModelCommand(CLI::App& app, cli::Registry& registry);
 void registerPlanCommands(CLI::App& app, cli::Registry& registry);
 void registerSimCommand(CLI::App& app, cli::Registry& registry);
 void registerReplayCommand(CLI::App& app, cli::Registry& registry);
+void registerDemoCommand(CLI::App& app, cli::Registry& registry);
 }  // namespace overstep
 
 int main(int argc, char** argv) {
@@ -19,6 +20,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.footer(
       "Examples:\n"
+      "  overstep demo                       # plan, simulate and replay the overstep\n"
       "  overstep model                      # print the HRP-2-class model summary\n"
       "  overstep model --json               # the same as one JSON object\n"
       "  overstep plan --out plan.json       # plan the 20 cm x 11 cm overstep\n"
@@ -33,6 +35,7 @@ int main(int argc, char** argv) {
   overstep::registerPlanCommands(app, registry);
   overstep::registerSimCommand(app, registry);
   overstep::registerReplayCommand(app, registry);
+  overstep::registerDemoCommand(app, registry);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

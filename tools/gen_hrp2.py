@@ -236,7 +236,14 @@ def yaml():
     for side, s in (("R", -1.0), ("L", 1.0)):
         caps += [(side + "LEG_LINK2", (0, 0, -0.03), (0, 0, -0.27), 0.06),
                  (side + "LEG_LINK3", (0, 0, -0.03), (0, 0, -0.27), 0.05),
-                 (side + "LEG_FOOT", (-0.085, s * 0.0095, -0.025), (0.115, s * 0.0095, -0.025), 0.03),
+                 # The sole box (0.23 x 0.131 x 0.02 m, x -0.10..0.13) as three capsules along
+                 # its inner edge, middle and outer edge, ending 1 cm inside its ends, radius
+                 # sqrt(0.01^2 + 0.02^2 + 0.01^2) so that they reach its corners. One capsule of
+                 # radius 0.03 on the middle line missed the edges: a swing foot rolled 0.33 rad
+                 # hit the bar in the simulator while the planner's capsule cleared it (measured).
+                 (side + "LEG_FOOT", (-0.09, s * 0.0095 - 0.0455, -0.025), (0.12, s * 0.0095 - 0.0455, -0.025), 0.0245),
+                 (side + "LEG_FOOT", (-0.09, s * 0.0095, -0.025), (0.12, s * 0.0095, -0.025), 0.0245),
+                 (side + "LEG_FOOT", (-0.09, s * 0.0095 + 0.0455, -0.025), (0.12, s * 0.0095 + 0.0455, -0.025), 0.0245),
                  (side + "ARM_LINK2", (0, 0, -0.02), (0, 0, -0.23), 0.05),
                  (side + "ARM_LINK3", (0, 0, -0.02), (0, 0, -0.23), 0.045),
                  (side + "ARM_LINK6", (0, 0, 0.0), (0, 0, -0.10), 0.045)]

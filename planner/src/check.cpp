@@ -74,20 +74,19 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
   const int base = model.frameIndex(d.base_link);
   std::vector<int> cap_frame;
   for (const auto& c : d.capsules) cap_frame.push_back(model.frameIndex(c.link));
-  auto capIndex = [&](const std::string& link) {
-    for (std::size_t i = 0; i < d.capsules.size(); ++i)
-      if (d.capsules[i].link == link) return static_cast<int>(i);
-    return -1;
-  };
-  std::vector<int> leg_caps;
-  for (const char* l :
-       {"RLEG_LINK2", "RLEG_LINK3", "RLEG_FOOT", "LLEG_LINK2", "LLEG_LINK3", "LLEG_FOOT"})
-    if (capIndex(l) >= 0) leg_caps.push_back(capIndex(l));
+
+  // Every capsule of the legs' thighs, shanks and feet; self-collision: right leg vs left leg.
+  std::vector<int> leg_caps, side_caps[2];
+  for (int f = 0; f < 2; ++f)
+    for (const char* l : {"LINK2", "LINK3", "FOOT"})
+      for (std::size_t i = 0; i < d.capsules.size(); ++i)
+        if (d.capsules[i].link == std::string(f == 0 ? "RLEG_" : "LLEG_") + l) {
+          leg_caps.push_back(static_cast<int>(i));
+          side_caps[f].push_back(static_cast<int>(i));
+        }
   std::vector<std::pair<int, int>> pairs;
-  for (int a = 0; a < 3 && a < static_cast<int>(leg_caps.size()); ++a)
-    for (int b = 3; b < static_cast<int>(leg_caps.size()); ++b)
-      pairs.emplace_back(leg_caps[static_cast<std::size_t>(a)],
-                         leg_caps[static_cast<std::size_t>(b)]);
+  for (int a : side_caps[0])
+    for (int b : side_caps[1]) pairs.emplace_back(a, b);
   const robots::ObstacleGeometry og =
       robots::ObstacleGeometry::fromSpec(plan.obstacle, plan.toes_x);
 

@@ -188,10 +188,9 @@ struct OverstepProblem::Impl {
     };
     for (int f = 0; f < 2; ++f) {
       const std::string p = f == kRight ? "RLEG_" : "LLEG_";
-      for (const char* l : {"LINK2", "LINK3", "FOOT"}) {
-        const int i = capIndex(p + l);
-        if (i >= 0) leg_caps[f].push_back(i);
-      }
+      for (const char* l : {"LINK2", "LINK3", "FOOT"})  // every capsule of these links
+        for (std::size_t i = 0; i < caps.size(); ++i)
+          if (caps[i].link == p + l) leg_caps[f].push_back(static_cast<int>(i));
     }
     // Self-collision pairs that a stepping motion can bring together: legs with each other and
     // the hanging arms with the thighs.

@@ -1,0 +1,310 @@
+// `overstep demo`: the main job. Plans the overstep (or reuses a cached plan for identical inputs),
+// starts the simulator and the replay runtime as child processes in lockstep on a private LCM
+// port, records the bus with lcm-logger into a run folder, stops everything cleanly and prints a
+// verdict. Every child is this same binary (or lcm-logger); the verdict comes from their --json
+// summaries.
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "overstep/cli/command.hpp"
+#include "overstep/core/error.hpp"
+#include "overstep/core/plan.hpp"
+
+namespace overstep {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+struct DemoOptions {
+  std::string robot, config, truth, run_root = "runs", run_dir, cache_dir, lcm_url;
+  double height = 0.20, width = 0.11, gap = 0.03, margin = 0.0;
+  std::string shape = "box";
+  bool replan = false, allow_invalid = false, no_stabilizer = false, json = false;
+  double timeout = 120.0;  ///< s of wall time for the run (after planning)
+};
+
+std::string selfExe() {
+  std::error_code ec;
+  const fs::path p = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) throw std::runtime_error("cannot find the overstep executable (/proc/self/exe)");
+  return p.string();
+}
+
+std::string readAll(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string shellQuote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
+/// Starts `argv` with stdout/stderr to files (empty: inherit); returns the pid.
+pid_t spawn(const std::vector<std::string>& argv, const std::string& out, const std::string& err) {
+  std::string cmd = "exec";
+  for (const auto& a : argv) cmd += " " + shellQuote(a);
+  if (!out.empty()) cmd += " >" + shellQuote(out);
+  if (!err.empty()) cmd += " 2>" + shellQuote(err);
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error("fork failed");
+  if (pid == 0) {
+    execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  return pid;
+}
+
+/// Waits up to `timeout_s` (< 0: forever); returns the exit code, -signal, or -1000 on timeout.
+int waitFor(pid_t pid, double timeout_s) {
+  const auto t0 = std::chrono::steady_clock::now();
+  int status = 0;
+  while (true) {
+    const pid_t r = waitpid(pid, &status, timeout_s < 0 ? 0 : WNOHANG);
+    if (r == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : -WTERMSIG(status);
+    if (r < 0) return -1;
+    if (timeout_s >= 0 &&
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() > timeout_s)
+      return -1000;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+}
+
+int stop(pid_t pid, int sig, double grace_s) {
+  kill(pid, sig);
+  int code = waitFor(pid, grace_s);
+  if (code == -1000) {
+    kill(pid, SIGKILL);
+    code = waitFor(pid, -1);
+  }
+  return code;
+}
+
+json readJson(const fs::path& p) { return json::parse(readAll(p), nullptr, false); }
+
+std::string utcStamp() {
+  const std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%d-%H%M%S", std::gmtime(&t));
+  return buf;
+}
+
+std::string hex(std::size_t h) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%016zx", h);
+  return buf;
+}
+
+int runDemo(const DemoOptions& o) {
+  if (!(o.timeout > 0.0)) throw InputError("--timeout: expected > 0 s");
+  if (!fs::is_regular_file(o.robot)) throw InputError("robot file not found: " + o.robot);
+  if (!o.config.empty() && !fs::is_regular_file(o.config))
+    throw InputError("planner config not found: " + o.config);
+  if (!o.truth.empty() && !fs::is_regular_file(o.truth))
+    throw InputError("truth file not found: " + o.truth);
+  const std::string exe = selfExe();
+  const fs::path run = o.run_dir.empty() ? fs::path(o.run_root) / utcStamp() : fs::path(o.run_dir);
+  const fs::path cache =
+      o.cache_dir.empty() ? fs::path(o.run_root) / "cache" : fs::path(o.cache_dir);
+  std::error_code ec;
+  fs::create_directories(run, ec);
+  if (ec) throw InputError("cannot create run folder " + run.string() + ": " + ec.message());
+  fs::create_directories(cache, ec);
+  if (ec) throw InputError("cannot create cache folder " + cache.string() + ": " + ec.message());
+
+  // ---- 1. plan (cached on every input that shapes it)
+  std::vector<std::string> obstacle_args = {"--obstacle-height", std::to_string(o.height),
+                                            "--obstacle-width",  std::to_string(o.width),
+                                            "--obstacle-shape",  o.shape,
+                                            "--obstacle-gap",    std::to_string(o.gap),
+                                            "--margin",          std::to_string(o.margin)};
+  std::string key_text = readAll(o.robot) + "|" + (o.config.empty() ? "" : readAll(o.config));
+  for (const auto& a : obstacle_args) key_text += "|" + a;
+  const std::string key = hex(std::hash<std::string>{}(key_text));
+  const fs::path plan_file = cache / ("plan-" + key + ".json");
+  const fs::path failed_file = cache / ("plan-" + key + ".failed.json");
+  bool plan_valid = false;
+  fs::path plan_used;
+  if (!o.replan && fs::is_regular_file(plan_file)) {
+    std::fprintf(stderr, "demo: reusing the plan cached for these inputs: %s\n", plan_file.c_str());
+    plan_valid = true;
+    plan_used = plan_file;
+  } else if (!o.replan && o.allow_invalid && fs::is_regular_file(failed_file)) {
+    std::fprintf(stderr, "demo: reusing the invalid plan cached for these inputs: %s\n",
+                 failed_file.c_str());
+    plan_used = failed_file;
+  } else {
+    std::vector<std::string> argv = {
+        exe, "plan", "--robot", o.robot, "--out", plan_file.string(), "--json"};
+    if (!o.config.empty()) argv.insert(argv.end(), {"--config", o.config});
+    argv.insert(argv.end(), obstacle_args.begin(), obstacle_args.end());
+    std::fprintf(stderr, "demo: planning (the plan is cached in %s)\n", cache.c_str());
+    const int code = waitFor(spawn(argv, (run / "plan_summary.json").string(), ""), -1);
+    if (code == kExitOk) {
+      plan_valid = true;
+      plan_used = plan_file;
+    } else if (code == kExitInfeasible && o.allow_invalid && fs::is_regular_file(failed_file)) {
+      std::fprintf(stderr,
+                   "demo: no valid plan; replaying the best attempt (--allow-invalid-plan)\n");
+      plan_used = failed_file;
+    } else if (code == kExitInfeasible) {
+      throw InfeasibleError("no valid plan for this obstacle (best attempt " +
+                            failed_file.string() + "; replay it anyway with --allow-invalid-plan)");
+    } else if (code == kExitBadInput) {
+      throw InputError("the planner refused the inputs (see its message above)");
+    } else {
+      throw std::runtime_error("the planner failed with exit code " + std::to_string(code));
+    }
+  }
+  fs::copy_file(plan_used, run / "plan.json", fs::copy_options::overwrite_existing, ec);
+  const core::Plan plan = core::loadPlan((run / "plan.json").string());
+
+  // ---- 2. simulator, runtime and logger on a private LCM port
+  const std::string url =
+      o.lcm_url.empty() ? "udpm://239.255.76.67:" + std::to_string(7700 + getpid() % 200) + "?ttl=0"
+                        : o.lcm_url;
+  setenv("LCM_DEFAULT_URL", url.c_str(), 1);
+  const pid_t logger =
+      spawn({"lcm-logger", "-q", "-f", "--lcm-url=" + url, (run / "bus.lcmlog").string()}, "",
+            (run / "logger.err").string());
+  std::vector<std::string> replay_argv = {exe,        "replay",  (run / "plan.json").string(),
+                                          "--robot",  o.robot,   "--clock",
+                                          "lockstep", "--start", "--json",
+                                          "--linger", "1.0",     "--lcm-url",
+                                          url};
+  if (o.no_stabilizer) replay_argv.push_back("--no-stabilizer");
+  const pid_t replay =
+      spawn(replay_argv, (run / "replay.json").string(), (run / "replay.log").string());
+  std::vector<std::string> sim_argv = {exe,     "sim",    "--lockstep", "--robot",
+                                       o.robot, "--json", "--lcm-url",  url};
+  sim_argv.insert(sim_argv.end(), obstacle_args.begin(), obstacle_args.end());
+  if (!o.truth.empty()) sim_argv.insert(sim_argv.end(), {"--truth", o.truth});
+  const pid_t sim = spawn(sim_argv, (run / "sim.json").string(), (run / "sim.log").string());
+  std::fprintf(stderr, "demo: simulator and runtime running in lockstep on %s; run folder %s\n",
+               url.c_str(), run.c_str());
+  const auto t0 = std::chrono::steady_clock::now();
+  int replay_code = waitFor(replay, o.timeout);
+  if (replay_code == -1000) replay_code = stop(replay, SIGINT, 5.0);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const int sim_code = stop(sim, SIGTERM, 10.0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  stop(logger, SIGINT, 5.0);
+
+  // ---- 3. verdict
+  const json r = readJson(run / "replay.json");
+  const json s = readJson(run / "sim.json");
+  if (!r.is_object() || !s.is_object())
+    throw std::runtime_error("the runtime or the simulator left no summary (see " +
+                             (run / "replay.log").string() + " and sim.log)");
+  const bool fell = s.value("fell", true);
+  const bool contact = s.value("obstacle_contact", true);
+  const bool finished = r.value("finished", false);
+  const double far_x = s["obstacle_x"][1].get<double>();
+  const bool beyond = s.value("right_heel_x", -1e9) > far_x && s.value("left_heel_x", -1e9) > far_x;
+  const bool still = s.value("base_speed", 1e9) < 0.02;
+  json v;
+  v["cleared"] = finished && !fell && !contact && beyond && still;
+  v["fell"] = fell;
+  v["obstacle_contact"] = contact;
+  v["finished"] = finished;
+  v["feet_beyond_obstacle"] = beyond;
+  v["static_at_end"] = still;
+  v["plan_valid"] = plan_valid;
+  v["plan_duration"] = plan.duration();
+  v["duration"] = r.value("executed_duration", 0.0);
+  v["tracking_rms"] = r.value("tracking_rms", 0.0);
+  v["cop_max"] = r.value("cop_max", json::object());
+  v["torso_deviation_max"] = r.value("torso_deviation_max", 0.0);
+  v["stabilizer_effort"] = r.value("stabilizer_effort", 0.0);
+  v["stabilizer"] = !o.no_stabilizer;
+  v["runtime_state"] = r.value("state", "");
+  v["runtime_fault"] = r.value("fault", "");
+  v["obstacle"] = {{"height", o.height},
+                   {"width", o.width},
+                   {"shape", o.shape},
+                   {"gap", o.gap},
+                   {"margin", o.margin}};
+  v["truth"] = o.truth;
+  v["run_dir"] = run.string();
+  v["wall_time"] = wall;
+  v["exit_codes"] = {{"replay", replay_code}, {"sim", sim_code}};
+  core::writeFileAtomic((run / "verdict.json").string(), v.dump(2) + "\n");
+  if (o.json) {
+    std::cout << v.dump(2) << "\n";
+  } else {
+    std::printf("%s: %s\n", v["cleared"].get<bool>() ? "CLEARED" : "NOT CLEARED",
+                fell        ? "the robot fell"
+                : contact   ? "the robot touched the obstacle"
+                : !finished ? ("the runtime stopped: " + r.value("fault", std::string("?"))).c_str()
+                : !beyond   ? "a foot did not get past the obstacle"
+                : !still    ? "the robot was still moving at the end"
+                            : "both feet past the obstacle, standing still");
+    std::printf("executed %.2f s (plan %.2f s%s; the seed: 4.32 s plan, 4.33 s simulated)\n",
+                v["duration"].get<double>(), plan.duration(), plan_valid ? "" : ", INVALID plan");
+    std::printf(
+        "tracking RMS %.4f rad, stabilizer effort %.4f rad, largest CoP excursion R %.3f m L "
+        "%.3f m, torso deviation %.3f rad\n",
+        v["tracking_rms"].get<double>(), v["stabilizer_effort"].get<double>(),
+        r["cop_max"].value("right", 0.0), r["cop_max"].value("left", 0.0),
+        v["torso_deviation_max"].get<double>());
+    std::printf("run folder: %s (plan.json, bus.lcmlog, replay.json, sim.json, verdict.json)\n",
+                run.c_str());
+  }
+  return v["cleared"].get<bool>() ? kExitOk : kExitHeld;
+}
+
+}  // namespace
+
+void registerDemoCommand(CLI::App& app, cli::Registry& registry) {
+  auto o = std::make_shared<DemoOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "demo", "Plan, simulate and replay the overstep with the stabilizer; print a verdict");
+  sub->add_option("--robot", o->robot, "Robot YAML")->default_val(cli::defaultRobotPath());
+  sub->add_option("--config", o->config, "Planner configuration (default: embedded)");
+  sub->add_option("--obstacle-height", o->height, "Envelope height, m")->default_val(0.20);
+  sub->add_option("--obstacle-width", o->width, "Envelope width along x, m")->default_val(0.11);
+  sub->add_option("--obstacle-shape", o->shape, "box or cylinder")->default_val("box");
+  sub->add_option("--obstacle-gap", o->gap, "From the start toes to the bar, m")->default_val(0.03);
+  sub->add_option("--margin", o->margin, "Extra clearance on every side, m")->default_val(0.0);
+  sub->add_option("--truth", o->truth, "Simulate with undeclared effects (docs/truth-file.md)");
+  sub->add_option("--run-root", o->run_root, "Folder of run folders and the plan cache")
+      ->default_val("runs");
+  sub->add_option("--run-dir", o->run_dir, "This run's folder (default: RUN_ROOT/<UTC time>)");
+  sub->add_option("--cache-dir", o->cache_dir, "Plan cache (default: RUN_ROOT/cache)");
+  sub->add_option("--lcm-url", o->lcm_url, "LCM URL (default: a private udpm port, ttl=0)");
+  sub->add_option("--timeout", o->timeout, "Wall-time limit of the simulated run, s")
+      ->default_val(120.0);
+  sub->add_flag("--replan", o->replan, "Ignore the plan cache");
+  sub->add_flag("--allow-invalid-plan", o->allow_invalid,
+                "Replay the planner's best attempt when no plan passes the check");
+  sub->add_flag("--no-stabilizer", o->no_stabilizer, "Open-loop replay");
+  sub->add_flag("--json", o->json, "Print the verdict as JSON");
+  sub->footer(
+      "Examples:\n"
+      "  overstep demo                                  # the 20 cm x 11 cm overstep\n"
+      "  overstep demo --obstacle-height 0.05 --json    # a small bar, verdict as JSON\n"
+      "  overstep demo --truth truth.yaml               # on a robot with undeclared effects\n"
+      "Writes RUN_DIR/{plan.json, bus.lcmlog, replay.json, sim.json, verdict.json}.\n"
+      "Exit: 0 cleared, 2 bad input, 3 no valid plan, 4 the robot did not clear the obstacle.");
+  registry.add(sub, [o] { return runDemo(*o); });
+}
+
+}  // namespace overstep
