@@ -35,7 +35,8 @@ struct DemoOptions {
   double height = 0.20, width = 0.11, gap = 0.03, margin = 0.0;
   std::string shape = "box";
   bool replan = false, allow_invalid = false, no_stabilizer = false, json = false;
-  double timeout = 120.0;  ///< s of wall time for the run (after planning)
+  double timeout = 120.0;        ///< s of wall time for the run (after planning)
+  double plan_time_limit = 0.0;  ///< s, passed to overstep plan (0: its configuration's)
 };
 
 std::string selfExe() {
@@ -115,6 +116,7 @@ std::string hex(std::size_t h) {
 
 int runDemo(const DemoOptions& o) {
   if (!(o.timeout > 0.0)) throw InputError("--timeout: expected > 0 s");
+  if (!(o.plan_time_limit >= 0.0)) throw InputError("--plan-time-limit: expected >= 0 s");
   if (!fs::is_regular_file(o.robot)) throw InputError("robot file not found: " + o.robot);
   if (!o.config.empty() && !fs::is_regular_file(o.config))
     throw InputError("planner config not found: " + o.config);
@@ -155,6 +157,8 @@ int runDemo(const DemoOptions& o) {
     std::vector<std::string> argv = {
         exe, "plan", "--robot", o.robot, "--out", plan_file.string(), "--json"};
     if (!o.config.empty()) argv.insert(argv.end(), {"--config", o.config});
+    if (o.plan_time_limit > 0.0)
+      argv.insert(argv.end(), {"--time-limit", std::to_string(o.plan_time_limit)});
     argv.insert(argv.end(), obstacle_args.begin(), obstacle_args.end());
     std::fprintf(stderr, "demo: planning (the plan is cached in %s)\n", cache.c_str());
     const int code = waitFor(spawn(argv, (run / "plan_summary.json").string(), ""), -1);
@@ -292,6 +296,8 @@ void registerDemoCommand(CLI::App& app, cli::Registry& registry) {
   sub->add_option("--lcm-url", o->lcm_url, "LCM URL (default: a private udpm port, ttl=0)");
   sub->add_option("--timeout", o->timeout, "Wall-time limit of the simulated run, s")
       ->default_val(120.0);
+  sub->add_option("--plan-time-limit", o->plan_time_limit,
+                  "Wall-time limit of the planner, s (default: its configuration's)");
   sub->add_flag("--replan", o->replan, "Ignore the plan cache");
   sub->add_flag("--allow-invalid-plan", o->allow_invalid,
                 "Replay the planner's best attempt when no plan passes the check");
