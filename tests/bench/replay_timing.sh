@@ -18,7 +18,10 @@ set -u
 for rate in 200 1000; do
   "$bin" sim --realtime --no-obstacle --rate \$rate > /dev/null 2> "$out/sim.err" &
   sim=\$!
-  "$bin" replay "$out/stand.json" --clock timer --rate \$rate --start --json --quiet --linger 0.1 \
+  # The watchdog in wall time: 15 ms (3 periods at 200 Hz, 15 at 1 kHz, where 3 ms is shorter
+  # than this VM's scheduling hiccups: a 3-period watchdog tripped after 2 s, measured).
+  wd=\$(( rate == 1000 ? 15 : 3 ))
+  "$bin" replay "$out/stand.json" --clock timer --rate \$rate --watchdog \$wd --start --json --quiet --linger 0.1 \
     > "$out/replay_\$rate.json" 2> "$out/replay.err"
   kill \$sim; wait \$sim 2>/dev/null
 done
@@ -30,7 +33,7 @@ for rate in 200 1000; do
 import json, sys
 j = json.load(open(sys.argv[1]))
 p, q, r = j["period_us"], j["processing_us"], j["round_trip_us"]
-print(f"{sys.argv[2]:>5} Hz  state {j['state']:<9} ticks {j['ticks']:>6}  period us: min {p['min']:.0f} "
+print(f"{sys.argv[2]:>5} Hz  state {j['state']}{(' (' + j['fault'] + ')') if j['fault'] else ''}  ticks {j['ticks']:>6}  period us: min {p['min']:.0f} "
       f"mean {p['mean']:.1f} p99 {p['p99']:.0f} max {p['max']:.0f}  processing us: mean "
       f"{q['mean']:.1f} max {q['max']:.0f}  overruns {j['overruns']}  missed {j['missed_cycles']}  "
       f"round trip us: mean {r['mean']:.0f} max {r['max']:.0f}  ({j['realtime']})")

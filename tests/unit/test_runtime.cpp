@@ -386,6 +386,11 @@ TEST(LoopStats, WindowStatistics) {
   EXPECT_DOUBLE_EQ(w.period_p99, 5000.0);  // one outlier in 101 is above the 99th percentile
   EXPECT_EQ(s.overruns(), 1);
   EXPECT_DOUBLE_EQ(w.processing_max, 6000.0);
+  // The whole run: 101 ticks, one 8 ms outlier above the 99th percentile.
+  const auto all = s.run();
+  EXPECT_EQ(all.count, 101);
+  EXPECT_DOUBLE_EQ(all.period_max, 8000.0);
+  EXPECT_NEAR(all.period_p99, 5010.0, 1e-9);  // upper edge of the 10 us bin holding 5000 us
 }
 
 }  // namespace

@@ -112,7 +112,8 @@ class Replay {
   std::int64_t ticks_ = 0, seq_ = 0;
   double plan_time_ = 0.0;
   double move_T_ = 1.0;
-  Eigen::MatrixXd move_;  ///< joints x samples, planned by prepare()
+  static constexpr double kMoveRate = 100.0;  ///< Hz of the planned move's samples
+  Eigen::MatrixXd move_;                      ///< joints x samples, planned by prepare()
   bool move_ready_ = false;
   int move_k_ = 0;
   Eigen::VectorXd move_from_, q_hold_, q_prev_, qd_zero_;
