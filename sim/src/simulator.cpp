@@ -67,6 +67,9 @@ struct Simulator::Impl {
   std::vector<dd::Joint*> elastic;      // model order
   std::vector<double> bushing_inertia;  // kg m^2, bodies below each bushing about its axis
   std::array<dd::BodyNode*, 2> foot{};
+  std::array<core::FootDescription, 2> foot_desc{};
+  std::array<Eigen::Isometry3d, 2> sole_in_foot{
+      {Eigen::Isometry3d::Identity(), Eigen::Isometry3d::Identity()}};
   std::array<Obb, 2> foot_box{};  // collision box of each foot, body frame
   std::array<bool, 2> foot_is_box{{false, false}};
   Obb bar_box;
@@ -183,6 +186,10 @@ Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& tr
     const core::FootDescription* fd = d.foot(f == 0 ? "right" : "left");
     if (!fd) throw InputError("sim: the robot needs a right and a left foot");
     s.foot[static_cast<std::size_t>(f)] = s.robot->getBodyNode(fd->link);
+    s.foot_desc[static_cast<std::size_t>(f)] = *fd;
+    for (const auto& fr : d.frames)
+      if (fr.name == fd->sole_frame && fr.link == fd->link)
+        s.sole_in_foot[static_cast<std::size_t>(f)] = fr.X_LF;
     // The sensor frame's link and offset from the YAML.
     for (const auto& fr : d.frames) {
       if (fr.name != fd->force_sensor_frame) continue;
@@ -342,19 +349,33 @@ void Simulator::step() {
     const double ff = half > 0.0 && s.load_target(i) == before ? 0.0 : s.qd_ref(i);
     jt->setCommand(0, s.opt.servo_gain * (s.load_target(i) - jt->getPosition(0)) + ff);
   }
+  // A foot held flat by the ground (a tenth of the weight, its centre of pressure at least 5 mm
+  // inside the sole) makes the bushing move the whole body: the explicit damper is stable there
+  // (up to d dt ~ 0.01). A foot in the air, touching down or landing on an edge turns freely
+  // (about the edge): a tiny inertia on the damper (d dt / I ~ 2-7), so the damper is integrated
+  // implicitly on that inertia. Counting any contact, and then any load, as held both let the
+  // bushing spike to 10 rad within two steps (measured: at a planned touchdown, and at a 1 kN
+  // edge hit when a lifted foot fell back).
+  bool held[2] = {false, false};
+  for (int f = 0; f < 2; ++f) {
+    const auto fi = static_cast<std::size_t>(f);
+    const core::Vector6d& w = contacts_.foot_wrench[fi];  // world, about the world origin
+    if (!contacts_.foot_contact[fi] ||
+        w(5) < 0.1 * s.robot->getMass() * s.model.description().gravity)
+      continue;
+    const Eigen::Isometry3d X = s.foot[fi]->getWorldTransform() * s.sole_in_foot[fi];
+    const Eigen::Vector3d m =
+        X.linear().transpose() * (w.head<3>() - X.translation().cross(w.tail<3>()));
+    const double fz = (X.linear().transpose() * w.tail<3>()).z();
+    if (fz <= 0.0) continue;
+    const double cx = -m.y() / fz, cy = m.x() / fz, margin = 0.005;
+    const auto& fd = s.foot_desc[fi];
+    held[f] = cx > -fd.sole.x_back + margin && cx < fd.sole.x_front - margin &&
+              cy > fd.yMin() + margin && cy < fd.yMax() - margin;
+  }
   for (std::size_t e = 0; e < s.elastic.size(); ++e) {
-    // A loaded foot is held by its contacts and the bushing moves the whole body: the explicit
-    // damper is stable (up to d dt ~ 0.01). A foot in the air (or before the first contact) is
-    // a tiny inertia on the damper (d dt / I ~ 2-7): there the damper is integrated implicitly
-    // on that inertia, which keeps it stable.
-    // "Loaded" means carrying at least a tenth of the weight: at the first instants of a
-    // touchdown the foot touches with an edge and still turns freely about it, and the explicit
-    // damper on its small inertia diverged within two steps (measured: a 10 rad bushing spike).
     const double d = s.truth.elastic_damping[e];
-    const bool loaded =
-        contacts_.foot_contact[e / 2] &&
-        contacts_.foot_wrench[e / 2](5) > 0.1 * s.robot->getMass() * s.model.description().gravity;
-    const double d_use = loaded ? d : d / (1.0 + dt * d / s.bushing_inertia[e]);
+    const double d_use = held[e / 2] ? d : d / (1.0 + dt * d / s.bushing_inertia[e]);
     s.elastic[e]->setCommand(0, -s.truth.elastic_stiffness[e] * s.elastic[e]->getPosition(0) -
                                     d_use * s.elastic[e]->getVelocity(0));
   }
