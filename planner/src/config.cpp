@@ -69,6 +69,7 @@ std::string PlannerConfig::toJson() const {
   j["pelvis_tilt"] = pelvis_tilt;
   j["leg_reach"] = leg_reach;
   j["limit_margin"] = limit_margin;
+  j["ds_balance_band"] = ds_balance_band;
   j["weights"] = weights;
   j["head_pitch_offset"] = head_pitch_offset;
   j["solver"] = {{"algorithm", solver.algorithm},
@@ -109,7 +110,8 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
                                          "smooth_min_rho",
                                          "height_homotopy_step",
                                          "head_pitch_offset",
-                                         "limit_margin"};
+                                         "limit_margin",
+                                         "ds_balance_band"};
   std::map<std::string, double*> fields = {{"start_half_width", &c.start_half_width},
                                            {"step_length_min", &c.step_length_min},
                                            {"step_length_max", &c.step_length_max},
@@ -131,12 +133,15 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
                                            {"smooth_min_rho", &c.smooth_min_rho},
                                            {"height_homotopy_step", &c.height_homotopy_step},
                                            {"head_pitch_offset", &c.head_pitch_offset},
-                                           {"limit_margin", &c.limit_margin}};
+                                           {"limit_margin", &c.limit_margin},
+                                           {"ds_balance_band", &c.ds_balance_band}};
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>();
     const YAML::Node& v = kv.second;
     if (scalars.count(key)) {
-      *fields.at(key) = key == "head_pitch_offset" ? r.value(v, key) : r.positiveValue(v, key);
+      *fields.at(key) = key == "head_pitch_offset" ? r.value(v, key)
+                        : key == "ds_balance_band" ? r.valueAtLeast(v, key, 0.0)
+                                                   : r.positiveValue(v, key);
     } else if (key == "samples_per_phase") {
       c.samples_per_phase = r.perPhase<int>(v, key);
     } else if (key == "spline_intervals") {

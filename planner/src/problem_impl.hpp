@@ -256,8 +256,11 @@ struct OverstepProblem::Impl {
       if (ds) {
         for (int r = 0; r < 12; ++r) ineq_fam.push_back(Family::JointLimits);
         ineq_fam.push_back(Family::Reach);
+        if (cfg.ds_balance_band > 0.0)
+          for (int r = 0; r < 2; ++r) ineq_fam.push_back(Family::Dynamics);
       }
-      for (int r = 0; r < (ds ? 1 : 4); ++r) eq_fam.push_back(Family::Dynamics);
+      const int dyn_eq = ds ? (cfg.ds_balance_band > 0.0 ? 0 : 1) : 4;
+      for (int r = 0; r < dyn_eq; ++r) eq_fam.push_back(Family::Dynamics);
       ineq_cnt.push_back(static_cast<int>(ineq_fam.size()) - n_ineq);
       eq_cnt.push_back(static_cast<int>(eq_fam.size()) - n_eq);
       n_ineq = static_cast<int>(ineq_fam.size());
@@ -611,7 +614,12 @@ struct OverstepProblem::Impl {
         out.ineq(r++) = (aj.safeLower() - qj) / kJointScale;
       }
       out.ineq(r++) = (st.reach - cfg.leg_reach) / kDistScale;
-      out.eq(e++) = st.ds_balance / kFlexTorqueScale;
+      if (cfg.ds_balance_band > 0.0) {
+        out.ineq(r++) = (st.ds_balance - cfg.ds_balance_band) / kFlexTorqueScale;
+        out.ineq(r++) = (-st.ds_balance - cfg.ds_balance_band) / kFlexTorqueScale;
+      } else {
+        out.eq(e++) = st.ds_balance / kFlexTorqueScale;
+      }
     } else {
       const int stance = st.contact[kRight] ? kRight : kLeft;
       const Eigen::MatrixXd J = m.frameJacobian(sole_frame[stance]);

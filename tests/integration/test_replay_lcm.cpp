@@ -44,6 +44,7 @@ class ReplayLcm : public ::testing::Test {
   std::unique_ptr<robots::WholeBodyModel> model_;
   core::Plan plan_;
   std::string plan_file_;
+  test::ProcessGuard guard_;  ///< kills what a failed test left running
 };
 
 /// Collects what the runtime publishes.
@@ -69,11 +70,11 @@ struct Listener {
 };
 
 TEST_F(ReplayLcm, LockstepWithTheSimulatorFinishesStanding) {
-  const pid_t replay = test::spawnOverstep(
+  const pid_t replay = guard_.add(test::spawnOverstep(
       "replay " + plan_file_ + " --clock lockstep --start --json --quiet --linger 0.3",
-      dir_.file("replay.json"), dir_.file("replay.err"));
-  const pid_t sim = test::spawnOverstep("sim --lockstep --no-obstacle --json",
-                                        dir_.file("sim.json"), dir_.file("sim.err"));
+      dir_.file("replay.json"), dir_.file("replay.err")));
+  const pid_t sim = guard_.add(test::spawnOverstep("sim --lockstep --no-obstacle --json",
+                                                   dir_.file("sim.json"), dir_.file("sim.err")));
   const int code = test::waitOverstep(replay, 120);
   kill(sim, SIGTERM);
   EXPECT_EQ(test::waitOverstep(sim, 20), 0) << test::slurp(dir_.file("sim.err"));
@@ -93,11 +94,11 @@ TEST_F(ReplayLcm, LockstepWithTheSimulatorFinishesStanding) {
 }
 
 TEST_F(ReplayLcm, LcmClockIsPacedByTheSimulatorsStates) {
-  const pid_t sim = test::spawnOverstep("sim --realtime --no-obstacle", dir_.file("sim.out"),
-                                        dir_.file("sim.err"));
-  const pid_t replay = test::spawnOverstep(
+  const pid_t sim = guard_.add(test::spawnOverstep("sim --realtime --no-obstacle",
+                                                   dir_.file("sim.out"), dir_.file("sim.err")));
+  const pid_t replay = guard_.add(test::spawnOverstep(
       "replay " + plan_file_ + " --clock lcm --start --json --quiet --linger 0.2",
-      dir_.file("replay.json"), dir_.file("replay.err"));
+      dir_.file("replay.json"), dir_.file("replay.err")));
   const int code = test::waitOverstep(replay, 120);
   kill(sim, SIGTERM);
   test::waitOverstep(sim, 20);
@@ -114,15 +115,16 @@ TEST_F(ReplayLcm, KillingTheSimulatorHoldsWithinThreePeriods) {
   ASSERT_TRUE(bus.good());
   Listener l;
   l.attach(bus);
-  const pid_t sim = test::spawnOverstep("sim --realtime --no-obstacle", dir_.file("sim.out"),
-                                        dir_.file("sim.err"));
-  const pid_t replay = test::spawnOverstep(
+  const pid_t sim = guard_.add(test::spawnOverstep("sim --realtime --no-obstacle",
+                                                   dir_.file("sim.out"), dir_.file("sim.err")));
+  const pid_t replay = guard_.add(test::spawnOverstep(
       "replay " + plan_file_ + " --clock timer --start --json --quiet --linger 0.3",
-      dir_.file("replay.json"), dir_.file("replay.err"));
+      dir_.file("replay.json"), dir_.file("replay.err")));
   // Wait until the replay is running (status at 10 Hz), then kill the simulator outright.
   bool running = false;
-  for (int i = 0; i < 600 && !running; ++i) {
-    bus.handleTimeout(50);
+  const auto t_wait = std::chrono::steady_clock::now();
+  while (!running && std::chrono::steady_clock::now() - t_wait < std::chrono::seconds(30)) {
+    if (bus.handleTimeout(50) < 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
     running =
         !l.status.empty() && l.status.back().state == overstep::runtime_status_t::STATE_RUNNING;
   }
@@ -153,11 +155,11 @@ TEST_F(ReplayLcm, PauseResumeAndStopOverTheControlChannel) {
   ASSERT_TRUE(bus.good());
   Listener l;
   l.attach(bus);
-  const pid_t replay =
+  const pid_t replay = guard_.add(
       test::spawnOverstep("replay " + file + " --clock lockstep --json --quiet --linger 0.2",
-                          dir_.file("replay.json"), dir_.file("replay.err"));
-  const pid_t sim = test::spawnOverstep("sim --lockstep --no-obstacle", dir_.file("sim.out"),
-                                        dir_.file("sim.err"));
+                          dir_.file("replay.json"), dir_.file("replay.err")));
+  const pid_t sim = guard_.add(test::spawnOverstep("sim --lockstep --no-obstacle",
+                                                   dir_.file("sim.out"), dir_.file("sim.err")));
   auto send = [&](std::int8_t c) {
     overstep::replay_control_t m{};
     m.command = c;
@@ -194,9 +196,9 @@ TEST_F(ReplayLcm, PauseResumeAndStopOverTheControlChannel) {
 TEST_F(ReplayLcm, DroppedAndDelayedStatesAreCountedAndTheRunStaysSafe) {
   // A stand-in robot: perfect states of the plan's first sample at 200 Hz, 10 % of them dropped
   // (seeded), every one delivered 20 ms late; it reports the last command it received.
-  const pid_t replay = test::spawnOverstep(
+  const pid_t replay = guard_.add(test::spawnOverstep(
       "replay " + plan_file_ + " --clock timer --start --json --quiet --linger 0.2",
-      dir_.file("replay.json"), dir_.file("replay.err"));
+      dir_.file("replay.json"), dir_.file("replay.err")));
   lcm::LCM bus(std::getenv("LCM_DEFAULT_URL"));
   ASSERT_TRUE(bus.good());
   std::int64_t last_cmd = -1;

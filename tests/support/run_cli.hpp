@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "test_util.hpp"
 
@@ -67,5 +68,27 @@ inline int waitOverstep(pid_t pid, double timeout_s) {
     usleep(10000);
   }
 }
+
+/// Kills (SIGKILL) and reaps the processes it holds when it goes out of scope, so that a failed
+/// assertion never leaves a simulator or runtime talking on the bus of the next test.
+class ProcessGuard {
+ public:
+  pid_t add(pid_t pid) {
+    pids_.push_back(pid);
+    return pid;
+  }
+  ~ProcessGuard() {
+    for (pid_t p : pids_) {
+      if (kill(p, 0) == 0) {
+        kill(p, SIGKILL);
+        int status = 0;
+        waitpid(p, &status, 0);
+      }
+    }
+  }
+
+ private:
+  std::vector<pid_t> pids_;
+};
 
 }  // namespace overstep::test

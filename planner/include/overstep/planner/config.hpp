@@ -46,6 +46,9 @@ struct PlannerConfig {
   /// samples: the motion between samples keeps the rest as margin (`overstep check` verifies on a
   /// 1 kHz grid).
   double limit_margin = 0.8;
+  /// N m. 0: the double-support sway balance is an equality at each sample; > 0: a band
+  /// |residual| <= ds_balance_band (two inequality rows), easier on SLSQP with dense sampling.
+  double ds_balance_band = 0.0;
   double height_homotopy_step = 0.05;
 
   std::map<std::string, double> weights{{"elastic_acc", 0.01},
