@@ -127,7 +127,9 @@ class ReplayProcess {
         st = takeFresh();
       } else {
         // One tick per state message; a tick without one after the timeout (watchdog).
-        const double timeout = clock_ == Clock::Lcm ? period_ : o_.state_timeout;
+        // lcm: a state is due every period; wait half a period more before ticking without one
+        // (waiting exactly one period raced the next state and made 0.1 ms periods: measured).
+        const double timeout = clock_ == Clock::Lcm ? 1.5 * period_ : o_.state_timeout;
         const double until = nowSeconds() + timeout;
         while (!fresh_ && !g_stop.load()) {
           const double left = until - nowSeconds();
