@@ -199,7 +199,9 @@ int runDemo(const DemoOptions& o) {
       spawn(replay_argv, (run / "replay.json").string(), (run / "replay.log").string());
   std::vector<std::string> sim_argv = {exe,     "sim",    "--lockstep", "--robot",
                                        o.robot, "--json", "--lcm-url",  url};
-  sim_argv.insert(sim_argv.end(), obstacle_args.begin(), obstacle_args.end());
+  // The simulated bar is the envelope itself: --margin is extra clearance for the planner only
+  // (the last two obstacle arguments).
+  sim_argv.insert(sim_argv.end(), obstacle_args.begin(), obstacle_args.end() - 2);
   if (!o.truth.empty()) sim_argv.insert(sim_argv.end(), {"--truth", o.truth});
   const pid_t sim = spawn(sim_argv, (run / "sim.json").string(), (run / "sim.log").string());
   std::fprintf(stderr, "demo: simulator and runtime running in lockstep on %s; run folder %s\n",
@@ -287,7 +289,9 @@ void registerDemoCommand(CLI::App& app, cli::Registry& registry) {
   sub->add_option("--obstacle-width", o->width, "Envelope width along x, m")->default_val(0.11);
   sub->add_option("--obstacle-shape", o->shape, "box or cylinder")->default_val("box");
   sub->add_option("--obstacle-gap", o->gap, "From the start toes to the bar, m")->default_val(0.03);
-  sub->add_option("--margin", o->margin, "Extra clearance on every side, m")->default_val(0.0);
+  sub->add_option("--margin", o->margin,
+                  "Extra clearance on every side for the planner (not the simulated bar), m")
+      ->default_val(0.0);
   sub->add_option("--truth", o->truth, "Simulate with undeclared effects (docs/truth-file.md)");
   sub->add_option("--run-root", o->run_root, "Folder of run folders and the plan cache")
       ->default_val("runs");
