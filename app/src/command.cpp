@@ -1,5 +1,6 @@
 #include "overstep/cli/command.hpp"
 
+#include <csignal>
 #include <exception>
 #include <filesystem>
 #include <iostream>
@@ -38,6 +39,26 @@ int guarded(const std::string& command, const Runner& fn) {
     printError(command, std::string("internal error: ") + e.what());
     return kExitInternal;
   }
+}
+
+namespace {
+extern "C" void onStopSignal(int) { StopSignals::flag().store(true); }
+}  // namespace
+
+std::atomic<bool>& StopSignals::flag() {
+  static std::atomic<bool> stop{false};
+  return stop;
+}
+
+StopSignals::StopSignals(bool also_sigterm) : sigterm_(also_sigterm) {
+  flag().store(false);
+  prev_int_ = std::signal(SIGINT, onStopSignal);
+  if (sigterm_) prev_term_ = std::signal(SIGTERM, onStopSignal);
+}
+
+StopSignals::~StopSignals() {
+  std::signal(SIGINT, prev_int_);
+  if (sigterm_) std::signal(SIGTERM, prev_term_);
 }
 
 std::string defaultRobotPath() {

@@ -20,9 +20,6 @@
 namespace overstep {
 namespace {
 
-std::atomic<bool> g_stop{false};
-extern "C" void onSigint(int) { g_stop.store(true); }
-
 /// Beyond this the swing sole cannot be lifted over the bar at all (hip below 0.65 m, leg 0.6 m
 /// plus foot): answer at once instead of searching.
 constexpr double kReachableHeight = 0.45;
@@ -99,21 +96,20 @@ int runPlan(const PlanOptions& o) {
                  i.max_violation, i.step, i.elapsed);
     std::fflush(log);
   };
-  auto solver = planner::makeNloptSolver(cfg.solver, row, &g_stop);
-  g_stop.store(false);
-  auto previous = std::signal(SIGINT, onSigint);
+  auto solver = planner::makeNloptSolver(cfg.solver, row, &cli::StopSignals::flag());
+  const cli::StopSignals stop(false);  // Ctrl-C stops the solve and keeps the best so far
   const planner::PlanOutcome out = planner::planOverstep(
       problem, *solver, cfg.solver.time_limit,
       [log](const std::string& s) {
         std::fprintf(log, "-- %s\n", s.c_str());
         std::fflush(log);
       },
-      row, &g_stop);
-  std::signal(SIGINT, previous);
+      row, &cli::StopSignals::flag());
 
   const Eigen::VectorXd& x = out.final.x;
   nlohmann::json summary;
-  summary["status"] = g_stop.load() ? "interrupted" : (out.valid ? "solved" : "infeasible");
+  summary["status"] =
+      cli::StopSignals::requested() ? "interrupted" : (out.valid ? "solved" : "infeasible");
   summary["solver_status"] = out.final.status;
   summary["valid"] = out.valid;
   summary["duration"] = problem.durations(x).sum();
@@ -147,7 +143,8 @@ int runPlan(const PlanOptions& o) {
     if (!f.ok()) violated.push_back("check:" + f.name);
   const bool valid = out.valid && report.valid;
   summary["valid"] = valid;
-  summary["status"] = g_stop.load() ? "interrupted" : (valid ? "solved" : "infeasible");
+  summary["status"] =
+      cli::StopSignals::requested() ? "interrupted" : (valid ? "solved" : "infeasible");
   nlohmann::json checked;
   for (const auto& f : report.families) checked[f.name] = f.worst;
   summary["check"] = {{"valid", report.valid}, {"worst", checked}};
@@ -164,7 +161,7 @@ int runPlan(const PlanOptions& o) {
       summary["duration"].get<double>(), summary["step_length"].get<double>(),
       summary["foot_spacing"].get<double>(), out.iterations, out.solve_time, path.c_str());
   if (o.json) std::cout << summary.dump(2) << "\n";
-  if (g_stop.load()) {
+  if (cli::StopSignals::requested()) {
     cli::printError("plan", "interrupted; best attempt written to " + path);
     return kExitInterrupted;
   }

@@ -31,8 +31,7 @@
 namespace overstep {
 namespace {
 
-std::atomic<bool> g_stop{false};
-extern "C" void onReplaySignal(int) { g_stop.store(true); }
+bool stopRequested() { return cli::StopSignals::requested(); }
 
 enum class Clock { Timer, Lcm, Lockstep };
 
@@ -131,14 +130,14 @@ class ReplayProcess {
         // (waiting exactly one period raced the next state and made 0.1 ms periods: measured).
         const double timeout = clock_ == Clock::Lcm ? 1.5 * period_ : o_.state_timeout;
         const double until = nowSeconds() + timeout;
-        while (!fresh_ && !g_stop.load()) {
+        while (!fresh_ && !stopRequested()) {
           const double left = until - nowSeconds();
           if (left <= 0.0) break;
           drain(std::max(1, static_cast<int>(std::ceil(left * 1000.0))));
         }
         st = takeFresh();
       }
-      if (g_stop.load()) {
+      if (stopRequested()) {
         replay_.stop();
         interrupted_ = true;
       }
@@ -252,7 +251,7 @@ class ReplayProcess {
     ts.tv_sec = static_cast<time_t>(std::floor(t));
     ts.tv_nsec = static_cast<long>((t - std::floor(t)) * 1e9);
     while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-      if (g_stop.load()) return;
+      if (stopRequested()) return;
     }
   }
 
@@ -498,17 +497,13 @@ int runReplay(const ReplayCliOptions& o) {
   ro.stabilizer = !o.no_stabilizer;
   ro.watchdog_periods = o.watchdog;
   ReplayProcess p(o, clock, track, params, ro);
-  g_stop.store(false);
-  auto prev_int = std::signal(SIGINT, onReplaySignal);
-  auto prev_term = std::signal(SIGTERM, onReplaySignal);
+  const cli::StopSignals stop;
   if (!o.quiet)
     std::fprintf(stderr, "replay: %s (%.2f s, %d samples) at %.0f Hz, clock %s, stabilizer %s%s\n",
                  o.plan.c_str(), track.duration(), track.samples(), o.rate, o.clock.c_str(),
                  o.no_stabilizer ? "off" : "on",
                  o.start ? "" : "; waiting for START on OVERSTEP_REPLAY_CONTROL");
   const int code = p.run();
-  std::signal(SIGINT, prev_int);
-  std::signal(SIGTERM, prev_term);
   return code;
 }
 

@@ -23,8 +23,7 @@
 namespace overstep {
 namespace {
 
-std::atomic<bool> g_stop{false};
-extern "C" void onSignal(int) { g_stop.store(true); }
+bool stopRequested() { return cli::StopSignals::requested(); }
 
 struct SimCliOptions {
   std::string robot;
@@ -98,7 +97,7 @@ class SimProcess {
     auto deadline = wall0;
     auto rtf_wall = wall0;
     double rtf_sim = 0.0;
-    while (!g_stop.load()) {
+    while (!stopRequested()) {
       if (o_.duration > 0.0 && sim_.time() >= o_.duration - 1e-9) break;
       if (o_.lockstep) {
         // One control period per accepted command, as fast as the commands come. While none
@@ -106,9 +105,9 @@ class SimProcess {
         // so a runtime that started after the first announcement still gets going.
         fresh_ = false;
         auto announced = std::chrono::steady_clock::now();
-        while (!fresh_ && !g_stop.load()) {
+        while (!fresh_ && !stopRequested()) {
           if (lcm_.handleTimeout(100) < 0) {
-            if (g_stop.load()) break;  // interrupted by the signal that stops us
+            if (stopRequested()) break;  // interrupted by the signal that stops us
             throw std::runtime_error("LCM receive failed");
           }
           const auto now = std::chrono::steady_clock::now();
@@ -119,7 +118,7 @@ class SimProcess {
             announced = now;
           }
         }
-        if (g_stop.load()) break;
+        if (stopRequested()) break;
       } else {
         while (lcm_.handleTimeout(0) > 0) {
         }
@@ -293,14 +292,10 @@ int runSim(const SimCliOptions& o) {
   const sim::TruthEffects truth =
       o.truth.empty() ? sim::noTruthEffects(model) : sim::loadTruth(o.truth, model);
   SimProcess p(checked, model, truth);
-  g_stop.store(false);
-  auto prev_int = std::signal(SIGINT, onSignal);
-  auto prev_term = std::signal(SIGTERM, onSignal);
+  const cli::StopSignals stop;
   std::fprintf(stderr, "sim: %s at %.0f Hz on %s%s\n", o.lockstep ? "lockstep" : "realtime", o.rate,
                o.lcm_url.c_str(), truth.none() ? "" : " (with truth effects)");
   const int code = p.run();
-  std::signal(SIGINT, prev_int);
-  std::signal(SIGTERM, prev_term);
   return code;
 }
 

@@ -5,6 +5,7 @@
 /// stderr ("overstep <cmd>: error: ...") and an exit code from overstep::ExitCode.
 
 #include <CLI/CLI.hpp>
+#include <atomic>
 #include <functional>
 #include <string>
 #include <vector>
@@ -33,5 +34,24 @@ std::string defaultRobotPath();
 
 /// Prints a one-line error for command to stderr.
 void printError(const std::string& command, const std::string& message);
+
+/// While alive, SIGINT (and SIGTERM if asked) set a flag instead of killing the process, so that
+/// long work (a solve, a simulation, a replay) can stop cleanly and keep what it has; the
+/// previous handlers come back on destruction. One at a time.
+class StopSignals {
+ public:
+  explicit StopSignals(bool also_sigterm = true);
+  ~StopSignals();
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+  /// The flag (async-signal-safe to set; pass it to code that polls it).
+  static std::atomic<bool>& flag();
+  static bool requested() { return flag().load(); }
+
+ private:
+  bool sigterm_;
+  void (*prev_int_)(int) = nullptr;
+  void (*prev_term_)(int) = nullptr;
+};
 
 }  // namespace overstep::cli
