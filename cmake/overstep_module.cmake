@@ -32,4 +32,11 @@ function(overstep_gtest name)
   target_include_directories(${name} PRIVATE ${OVERSTEP_DATA_DIR}/tests/support)
   gtest_discover_tests(${name} DISCOVERY_MODE PRE_TEST DISCOVERY_TIMEOUT 60
                        PROPERTIES LABELS "${T_LABELS}")
+  # `unit_tests` builds every unit-test binary and nothing else (the sanitizer job runs only them).
+  if("unit" IN_LIST T_LABELS)
+    if(NOT TARGET unit_tests)
+      add_custom_target(unit_tests)
+    endif()
+    add_dependencies(unit_tests ${name})
+  endif()
 endfunction()

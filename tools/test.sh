@@ -14,6 +14,6 @@ if [ "${OVERSTEP_SKIP_SANITIZE:-0}" != 1 ]; then
   echo "== sanitizer job (ASan + UBSan): unit tests"
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" \
         -DOVERSTEP_WERROR=ON -DOVERSTEP_SANITIZE=ON -DOVERSTEP_BUILD_BENCH=OFF >/dev/null
-  cmake --build build-asan -j"$jobs"
+  cmake --build build-asan -j"$jobs" --target unit_tests  # only what this job runs
   ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-asan -j"$jobs" -L unit --output-on-failure --timeout 1500
 fi
