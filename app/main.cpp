@@ -11,6 +11,7 @@ void registerPlanCommands(CLI::App& app, cli::Registry& registry);
 void registerSimCommand(CLI::App& app, cli::Registry& registry);
 void registerReplayCommand(CLI::App& app, cli::Registry& registry);
 void registerDemoCommand(CLI::App& app, cli::Registry& registry);
+void registerMonitorCommands(CLI::App& app, cli::Registry& registry);
 }  // namespace overstep
 
 int main(int argc, char** argv) {
@@ -27,6 +28,8 @@ int main(int argc, char** argv) {
       "  overstep check plan.json            # re-verify a plan on a 1 kHz grid\n"
       "  overstep sim --realtime             # the simulated robot on LCM\n"
       "  overstep replay plan.json --start   # stream a plan through the stabilizer\n"
+      "  overstep monitor                    # terminal view of the bus (or of a log)\n"
+      "  overstep report runs/<run>          # figures: plan vs measurement\n"
       "  overstep <subcommand> --help        # options of one subcommand\n"
       "Exit codes: 0 ok, 1 internal error, 2 bad input, 3 infeasible request,\n4 a replay ended "
       "holding after a fault, 130 interrupted.");
@@ -36,6 +39,7 @@ int main(int argc, char** argv) {
   overstep::registerSimCommand(app, registry);
   overstep::registerReplayCommand(app, registry);
   overstep::registerDemoCommand(app, registry);
+  overstep::registerMonitorCommands(app, registry);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -31,10 +31,11 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 struct DemoOptions {
-  std::string robot, config, truth, run_root = "runs", run_dir, cache_dir, lcm_url;
+  std::string robot, config, truth, run_root = "runs", run_dir, cache_dir, lcm_url, plan;
   double height = 0.20, width = 0.11, gap = 0.03, margin = 0.0;
   std::string shape = "box";
   bool replan = false, allow_invalid = false, no_stabilizer = false, json = false;
+  bool no_report = false;
   double timeout = 120.0;        ///< s of wall time for the run (after planning)
   double plan_time_limit = 0.0;  ///< s, passed to overstep plan (0: its configuration's)
 };
@@ -145,7 +146,23 @@ int runDemo(const DemoOptions& o) {
   const fs::path failed_file = cache / ("plan-" + key + ".failed.json");
   bool plan_valid = false;
   fs::path plan_used;
-  if (!o.replan && fs::is_regular_file(plan_file)) {
+  if (!o.plan.empty()) {
+    // A given plan: its validity is what the independent check says.
+    if (!fs::is_regular_file(o.plan)) throw InputError("plan file not found: " + o.plan);
+    const int code =
+        waitFor(spawn({exe, "check", o.plan, "--robot", o.robot, "--json"},
+                      (run / "plan_check.json").string(), (run / "plan_check.log").string()),
+                -1);
+    if (code == kExitBadInput)
+      throw InputError(o.plan + ": not a plan for this robot (see " +
+                       (run / "plan_check.log").string() + ")");
+    plan_valid = code == kExitOk;
+    if (!plan_valid && !o.allow_invalid)
+      throw InfeasibleError(o.plan +
+                            ": overstep check rejects it (replay it anyway with "
+                            "--allow-invalid-plan)");
+    plan_used = o.plan;
+  } else if (!o.replan && fs::is_regular_file(plan_file)) {
     std::fprintf(stderr, "demo: reusing the plan cached for these inputs: %s\n", plan_file.c_str());
     plan_valid = true;
     plan_used = plan_file;
@@ -252,6 +269,20 @@ int runDemo(const DemoOptions& o) {
   v["run_dir"] = run.string();
   v["wall_time"] = wall;
   v["exit_codes"] = {{"replay", replay_code}, {"sim", sim_code}};
+  if (!o.no_report) {
+    // The figures (overstep report); a failure there is reported but does not change the verdict.
+    const int code =
+        waitFor(spawn({exe, "report", run.string(), "--robot", o.robot, "--json"},
+                      (run / "report_summary.json").string(), (run / "report.log").string()),
+                -1);
+    if (code == kExitOk) {
+      v["report"] = (run / "report" / "index.html").string();
+    } else {
+      v["report"] = nullptr;
+      std::fprintf(stderr, "demo: the report failed (exit %d, see %s)\n", code,
+                   (run / "report.log").c_str());
+    }
+  }
   core::writeFileAtomic((run / "verdict.json").string(), v.dump(2) + "\n");
   if (o.json) {
     std::cout << v.dump(2) << "\n";
@@ -273,6 +304,8 @@ int runDemo(const DemoOptions& o) {
         v["torso_deviation_max"].get<double>());
     std::printf("run folder: %s (plan.json, bus.lcmlog, replay.json, sim.json, verdict.json)\n",
                 run.c_str());
+    if (v.contains("report") && v["report"].is_string())
+      std::printf("figures: %s\n", v["report"].get<std::string>().c_str());
   }
   return v["cleared"].get<bool>() ? kExitOk : kExitHeld;
 }
@@ -303,6 +336,9 @@ void registerDemoCommand(CLI::App& app, cli::Registry& registry) {
   sub->add_option("--plan-time-limit", o->plan_time_limit,
                   "Wall-time limit of the planner, s (default: its configuration's)");
   sub->add_flag("--replan", o->replan, "Ignore the plan cache");
+  sub->add_option("--plan", o->plan,
+                  "Replay this plan file instead of planning (its validity: overstep check)");
+  sub->add_flag("--no-report", o->no_report, "Skip the figures (overstep report) at the end");
   sub->add_flag("--allow-invalid-plan", o->allow_invalid,
                 "Replay the planner's best attempt when no plan passes the check");
   sub->add_flag("--no-stabilizer", o->no_stabilizer, "Open-loop replay");

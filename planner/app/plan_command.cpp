@@ -176,7 +176,7 @@ int runPlan(const PlanOptions& o) {
 }
 
 struct CheckOptions {
-  std::string plan, robot;
+  std::string plan, robot, trace;
   double rate = 1000.0;
   bool json = false;
 };
@@ -184,7 +184,23 @@ struct CheckOptions {
 int runCheck(const CheckOptions& o) {
   const core::Plan plan = core::loadPlan(o.plan);
   const robots::WholeBodyModel model = robots::WholeBodyModel::fromFile(o.robot);
-  const planner::CheckReport r = planner::checkPlan(plan, model, o.rate);
+  const planner::CheckReport r = planner::checkPlan(plan, model, o.rate, !o.trace.empty());
+  if (!o.trace.empty()) {
+    std::string csv = "t";
+    for (const auto& f : r.families) csv += "," + f.name + " [" + f.unit + "]";
+    csv += ",phase\n";
+    char buf[64];
+    for (std::size_t i = 0; i < r.trace_t.size(); ++i) {
+      std::snprintf(buf, sizeof buf, "%.4f", r.trace_t[i]);
+      csv += buf;
+      for (double v : r.trace[i]) {
+        std::snprintf(buf, sizeof buf, ",%.6g", std::isfinite(v) ? v : 0.0);
+        csv += buf;
+      }
+      csv += "," + std::to_string(r.trace_phase[i]) + "\n";
+    }
+    core::writeFileAtomic(o.trace, csv);
+  }
   if (o.json) {
     nlohmann::json j;
     j["valid"] = r.valid;
@@ -255,10 +271,14 @@ void registerPlanCommands(CLI::App& app, cli::Registry& registry) {
   check->add_option("--robot", co->robot, "Robot YAML")->capture_default_str();
   check->add_option("--rate", co->rate, "Grid rate, Hz")->capture_default_str();
   check->add_flag("--json", co->json, "Print {valid, families} as JSON");
+  check->add_option("--trace", co->trace,
+                    "Write each family's worst value at every grid point to this CSV "
+                    "(0 where a family has nothing to check)");
   check->footer(
       "Examples:\n"
       "  overstep check plan.json\n"
       "  overstep check plan.json --json | jq .valid\n"
+      "  overstep check plan.json --trace families.csv   # where violations build up\n"
       "Exit: 0 valid; 3 invalid (the table names the families); 2 bad input.");
   registry.add(check, [co] { return runCheck(*co); });
 }

@@ -17,6 +17,7 @@ double jsonNumber(const nlohmann::json& j, const char* key, double fallback) {
 
 struct Tracker {
   CheckFamily f;
+  double point = -std::numeric_limits<double>::infinity();  // worst at the current grid point
   Tracker(std::string name, double tol, std::string unit) {
     f.name = std::move(name);
     f.tolerance = tol;
@@ -24,6 +25,7 @@ struct Tracker {
     f.worst = -std::numeric_limits<double>::infinity();
   }
   void add(double v, double t, const std::string& detail) {
+    point = std::max(point, v);
     if (v > f.worst) {
       f.worst = v;
       f.t_worst = t;
@@ -41,7 +43,7 @@ const CheckFamily* CheckReport::family(const std::string& name) const {
 }
 
 CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& model_in,
-                      double rate_hz) {
+                      double rate_hz, bool trace) {
   robots::WholeBodyModel model(model_in);
   const auto& d = model.description();
   if (plan.robot_hash != d.hashHex()) {
@@ -99,8 +101,10 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
   CheckReport report;
   report.rate = rate_hz;
   report.grid_points = n;
+  Tracker* all[] = {&cop, &fric, &uni, &clear, &obst, &self, &lim, &vel, &trq, &pel, &stance, &dyn};
   int k = 0;
   for (int i = 0; i < n; ++i) {
+    for (Tracker* tr : all) tr->point = -std::numeric_limits<double>::infinity();
     const double t = std::min(i / rate_hz, T);
     while (k + 1 < plan.samples() && plan.t(k + 1) <= t + 1e-12) ++k;
     const double tau_dt = t - plan.t(k);
@@ -200,9 +204,15 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
     const Eigen::Matrix3d R = model.framePose(base).linear();
     pel.add(std::abs(std::atan2(R(2, 1), R(2, 2))) - tilt, t, "roll");
     pel.add(std::abs(std::asin(std::clamp(-R(2, 0), -1.0, 1.0))) - tilt, t, "pitch");
+    if (trace) {
+      report.trace_t.push_back(t);
+      report.trace_phase.push_back(ph);
+      std::vector<double> row;
+      for (const Tracker* tr : all) row.push_back(tr->point);
+      report.trace.push_back(std::move(row));
+    }
   }
-  for (Tracker* tr :
-       {&cop, &fric, &uni, &clear, &obst, &self, &lim, &vel, &trq, &pel, &stance, &dyn}) {
+  for (Tracker* tr : all) {
     if (!std::isfinite(tr->f.worst)) tr->f.worst = 0.0;
     report.families.push_back(tr->f);
   }

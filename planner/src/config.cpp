@@ -39,9 +39,9 @@ class ConfigReader : public core::YamlReader {
 
 const std::array<const char*, kObjectiveTerms>& objectiveTermNames() {
   static const std::array<const char*, kObjectiveTerms> names = {
-      "elastic_acc",    "elastic_vel",    "elastic_pos",      "lin_mom_z",
-      "lin_mom_z_rate", "ang_mom_z_rate", "contact_torque_z", "zmp_lipm",
-      "time",           "head",           "torque_rate",      "ds_leg_tracking"};
+      "elastic_acc",    "elastic_vel",      "elastic_pos", "lin_mom_z", "lin_mom_z_rate",
+      "ang_mom_z_rate", "contact_torque_z", "zmp_lipm",    "time",      "head",
+      "torque_rate",    "ds_leg_tracking",  "jerk_jump"};
   return names;
 }
 

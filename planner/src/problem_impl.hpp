@@ -714,6 +714,35 @@ struct OverstepProblem::Impl {
     return h;
   }
 
+  /// Mean squared jump of the jerk at the interior knots of every leg and ankle-flex curve, in
+  /// units of (10 rad/s^3)^2. Cubic curves only (a quintic's jerk is continuous): their
+  /// acceleration is linear on each span, so the jerk there is (a(k+1) - a(k)) / h(k).
+  double jerkJumps(const Workspace& w) const {
+    if (w.spline->degree() != 3) return 0.0;
+    const Eigen::ArrayXd& kn = w.spline->knots();
+    const int p = 3;
+    const int first = p, last = static_cast<int>(kn.size()) - p - 1;  // knots kn(first..last)
+    const int spans = last - first;
+    if (spans < 2) return 0.0;
+    Eigen::MatrixXd acc(16, spans + 1);
+    for (int k = 0; k <= spans; ++k) {
+      const double t = std::min(kn(first + k), kn(last) - 1e-12);
+      const PhaseSpline::Basis b = w.spline->evaluate(t);
+      const int nb = static_cast<int>(b.value.size());
+      acc.col(k).head(12) = w.legs_c.middleCols(b.first, nb) * b.d2;
+      acc.col(k).tail(4) = w.flex_c.middleCols(b.first, nb) * b.d2;
+    }
+    double sum = 0.0;
+    for (int k = 1; k < spans; ++k) {
+      const double h0 = kn(first + k) - kn(first + k - 1), h1 = kn(first + k + 1) - kn(first + k);
+      if (h0 < 1e-9 || h1 < 1e-9) continue;
+      const Eigen::VectorXd jump =
+          (acc.col(k + 1) - acc.col(k)) / h1 - (acc.col(k) - acc.col(k - 1)) / h0;
+      sum += jump.squaredNorm() / 100.0;
+    }
+    return sum / (16.0 * (spans - 1));
+  }
+
   double objective(const Workspace& w, const std::vector<const SampleOut*>& s,
                    std::array<double, kObjectiveTerms>* terms) const {
     std::array<double, kObjectiveTerms> acc{};
@@ -735,6 +764,7 @@ struct OverstepProblem::Impl {
     const double total = w.timing->total();
     for (int i = 0; i < kObjectiveTerms; ++i) acc[static_cast<std::size_t>(i)] /= total;
     acc[8] = total;
+    acc[12] = jerkJumps(w);
     double f = 0.0;
     for (int i = 0; i < kObjectiveTerms; ++i) {
       acc[static_cast<std::size_t>(i)] *= cfg.weights.at(names[static_cast<std::size_t>(i)]);

@@ -31,10 +31,15 @@ struct CheckReport {
   double rate = 0.0;
   std::vector<CheckFamily> families;
   const CheckFamily* family(const std::string& name) const;
+  /// With trace: per grid point, its time, the plan phase, and each family's worst value there
+  /// (same order as families; -inf where the family has nothing to check at that point).
+  std::vector<double> trace_t;
+  std::vector<int> trace_phase;
+  std::vector<std::vector<double>> trace;
 };
 
 /// Throws InputError when the plan was made for another robot (hash mismatch) or is unusable.
 CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& model,
-                      double rate_hz = 1000.0);
+                      double rate_hz = 1000.0, bool trace = false);
 
 }  // namespace overstep::planner

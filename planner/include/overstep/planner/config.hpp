@@ -62,7 +62,8 @@ struct PlannerConfig {
                                         {"time", 0.3},
                                         {"head", 0.1},
                                         {"torque_rate", 0.01},
-                                        {"ds_leg_tracking", 0.01}};
+                                        {"ds_leg_tracking", 0.01},
+                                        {"jerk_jump", 0.0}};
   double head_pitch_offset = 0.0;
 
   SolverSettings solver;
@@ -77,8 +78,10 @@ PlannerConfig loadPlannerConfig(const std::string& path);
 
 /// Number of objective terms: the seed's eqs. (20)-(27) split into 11 named terms, plus
 /// "ds_leg_tracking", a small regulariser that keeps the double-support leg's (unused) spline near
-/// its inverse-kinematics solution so that the IK is always seeded on the right branch.
-inline constexpr int kObjectiveTerms = 12;
+/// its inverse-kinematics solution so that the IK is always seeded on the right branch, and
+/// "jerk_jump", the squared jumps of the cubic splines' jerk at their knots (the acceleration
+/// kinks where the double-support sway balance peaks between samples; docs/planner.md).
+inline constexpr int kObjectiveTerms = 13;
 /// Names of the objective terms, in report order.
 const std::array<const char*, kObjectiveTerms>& objectiveTermNames();
 

@@ -1,0 +1,322 @@
+// `overstep spy`, `overstep monitor`, `overstep export` and `overstep report`.
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json.hpp>
+#include <thread>
+
+#include "overstep/cli/command.hpp"
+#include "overstep/core/error.hpp"
+#include "overstep/core/robot_description.hpp"
+#include "overstep/monitor/export.hpp"
+#include "overstep/monitor/lcm_log.hpp"
+#include "overstep/monitor/monitor.hpp"
+#include "overstep/monitor/report.hpp"
+
+namespace overstep {
+namespace {
+
+namespace fs = std::filesystem;
+
+double wallSeconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+double epochSeconds() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+// ------------------------------------------------------------------------------------- spy
+struct SpyOptions {
+  std::string lcm_url;
+  bool print_classpath = false;
+};
+
+std::string spyClasspath() {
+  std::string cp;
+  for (const char* jar : {OVERSTEP_LCM_JAR, OVERSTEP_MSGS_JAR}) {
+    if (!fs::exists(jar)) {
+      throw InputError(std::string(jar) + ": missing (build the overstep_msgs_jar target; " +
+                       "lcm.jar comes with the liblcm-java package)");
+    }
+    cp += (cp.empty() ? "" : ":") + std::string(jar);
+  }
+  return cp;
+}
+
+int runSpy(const SpyOptions& o) {
+  const std::string cp = spyClasspath();
+  if (o.print_classpath) {
+    std::cout << cp << "\n";
+    return kExitOk;
+  }
+  const char* display = std::getenv("DISPLAY");
+  if (display == nullptr || *display == '\0') {
+    throw InputError(
+        "no display (DISPLAY is unset): lcm-spy is a Swing window; use ssh -X, or "
+        "`overstep monitor` in a terminal");
+  }
+  if (!o.lcm_url.empty()) ::setenv("LCM_DEFAULT_URL", o.lcm_url.c_str(), 1);
+  // Debian's lcm-spy wrapper passes -Xincgc, which Java 17 rejects: start the class directly.
+  std::vector<char*> argv = {const_cast<char*>("java"), const_cast<char*>("-cp"),
+                             const_cast<char*>(cp.c_str()), const_cast<char*>("lcm.spy.Spy"),
+                             nullptr};
+  ::execvp("java", argv.data());
+  throw InputError("cannot start java (install default-jre): " + std::string(std::strerror(errno)));
+}
+
+// ------------------------------------------------------------------------------------- monitor
+struct MonitorOptions {
+  std::string source;  // a log file; empty: live
+  std::string lcm_url;
+  bool once = false, json = false;
+  double duration = 2.0;  // live --once: seconds to listen
+  double speed = 1.0;     // log playback speed; 0: as fast as possible
+  double interval = 0.25;
+  double window = 1.0;
+};
+
+void show(const monitor::Monitor& m, double now, const std::string& src, bool json, bool tty) {
+  if (json) {
+    std::cout << m.snapshot(now, src).dump() << std::endl;
+    return;
+  }
+  if (tty) std::cout << "\x1b[H\x1b[2J";
+  std::cout << m.render(now, src) << std::flush;
+  if (!tty) std::cout << "\n";
+}
+
+int monitorLog(const MonitorOptions& o) {
+  monitor::LogReader reader(o.source);
+  monitor::Monitor mon(o.window);
+  monitor::LogEvent ev;
+  const bool tty = ::isatty(STDOUT_FILENO) != 0;
+  cli::StopSignals stop;
+  double first = -1.0, last_show = -1e9, now = 0.0;
+  const double wall0 = wallSeconds();
+  while (reader.next(ev)) {
+    now = static_cast<double>(ev.timestamp) * 1e-6;
+    if (first < 0.0) first = now;
+    if (!o.once && o.speed > 0.0) {  // play at the recorded pace
+      const double due = wall0 + (now - first) / o.speed;
+      while (wallSeconds() < due && !stop.requested())
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    if (stop.requested()) break;
+    mon.add(ev.channel, now, ev.data, ev.size);
+    if (!o.once && now - last_show >= o.interval * std::max(o.speed, 1.0)) {
+      show(mon, now, o.source, o.json, tty);
+      last_show = now;
+    }
+  }
+  if (o.once || !o.json) show(mon, now, o.source, o.json, tty && !o.once);
+  if (reader.broken()) {
+    throw InputError(o.source + ": damaged at byte " + std::to_string(reader.breakOffset()) + " (" +
+                     reader.breakReason() + "); shown: the " + std::to_string(reader.events()) +
+                     " events before it");
+  }
+  return stop.requested() ? kExitInterrupted : kExitOk;
+}
+
+class LiveFeed {
+ public:
+  explicit LiveFeed(monitor::Monitor& m) : m_(m) {}
+  void handle(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    m_.add(channel, static_cast<double>(rbuf->recv_utime) * 1e-6, rbuf->data,
+           static_cast<int>(rbuf->data_size));
+  }
+
+ private:
+  monitor::Monitor& m_;
+};
+
+int monitorLive(const MonitorOptions& o) {
+  lcm::LCM lcm(o.lcm_url);
+  if (!lcm.good()) throw InputError("cannot open LCM at '" + o.lcm_url + "'");
+  monitor::Monitor mon(o.window);
+  LiveFeed feed(mon);
+  lcm.subscribe(".*", &LiveFeed::handle, &feed);
+  const std::string src = o.lcm_url.empty() ? "LCM (default URL)" : o.lcm_url;
+  const bool tty = ::isatty(STDOUT_FILENO) != 0;
+  cli::StopSignals stop;
+  const double start = wallSeconds();
+  double last_show = 0.0;
+  while (!stop.requested()) {
+    lcm.handleTimeout(20);
+    const double w = wallSeconds();
+    if (o.once) {
+      if (w - start >= o.duration) break;
+      continue;
+    }
+    if (w - last_show >= o.interval) {
+      show(mon, epochSeconds(), src, o.json, tty);
+      last_show = w;
+    }
+  }
+  if (o.once) show(mon, epochSeconds(), src, o.json, false);
+  return o.once || !stop.requested() ? kExitOk : kExitInterrupted;
+}
+
+int runMonitor(const MonitorOptions& o) {
+  if (!(o.interval > 0.0) || !(o.window > 0.0) || !(o.duration > 0.0) || !(o.speed >= 0.0))
+    throw InputError("--interval, --window and --duration must be > 0, --speed >= 0");
+  return o.source.empty() ? monitorLive(o) : monitorLog(o);
+}
+
+// ------------------------------------------------------------------------------------- export
+struct ExportOptions {
+  std::string log, dir, robot;
+  bool json = false;
+};
+
+int runExport(const ExportOptions& o) {
+  std::vector<std::string> joints;
+  if (!o.robot.empty()) {
+    const core::RobotDescription d = core::loadRobotDescription(o.robot);
+    for (const auto& a : d.actuated) joints.push_back(a.name);
+  }
+  const monitor::ExportSummary s = monitor::exportCsv(o.log, o.dir, joints);
+  if (o.json) {
+    nlohmann::json j;
+    j["events"] = s.events;
+    j["rows"] = s.rows;
+    j["files"] = s.files;
+    j["skipped"] = s.skipped;
+    j["break_offset"] = s.break_offset;
+    j["break_reason"] = s.break_reason;
+    std::cout << j.dump(2) << "\n";
+  } else {
+    for (const auto& [ch, n] : s.rows)
+      std::fprintf(stderr, "  %-24s %8lld rows -> %s\n", ch.c_str(), static_cast<long long>(n),
+                   s.files.at(ch).c_str());
+    for (const auto& [ch, n] : s.skipped)
+      std::fprintf(stderr, "  %-24s %8lld messages not ours or undecodable (skipped)\n", ch.c_str(),
+                   static_cast<long long>(n));
+  }
+  if (s.break_offset >= 0) {
+    throw InputError(o.log + ": damaged at byte " + std::to_string(s.break_offset) + " (" +
+                     s.break_reason + "); exported the " + std::to_string(s.events) +
+                     " events before it");
+  }
+  return kExitOk;
+}
+
+// ------------------------------------------------------------------------------------- report
+struct ReportCliOptions {
+  monitor::ReportOptions r;
+  bool json = false;
+};
+
+int runReport(const ReportCliOptions& o) {
+  if (!fs::is_directory(o.r.run_dir)) throw InputError(o.r.run_dir + ": no such run folder");
+  std::fprintf(stderr, "report: aligning the log with the plan, drawing the figures ...\n");
+  const monitor::ReportSummary s = monitor::makeReport(o.r);
+  if (o.json) {
+    nlohmann::json j;
+    j["out_dir"] = s.out_dir;
+    j["index"] = s.index_html;
+    j["manifest"] = s.manifest;
+    j["ticks"] = s.ticks;
+    j["t_range"] = {s.t_begin, s.t_end};
+    j["figures"] = s.figures;
+    j["log_break_offset"] = s.log_break_offset;
+    std::cout << j.dump(2) << "\n";
+  } else {
+    std::printf("report: %d ticks (plan time %.2f .. %.2f s), %zu figures -> %s\n", s.ticks,
+                s.t_begin, s.t_end, s.figures.size(), s.index_html.c_str());
+  }
+  if (s.log_break_offset >= 0)
+    std::fprintf(stderr, "report: the log is damaged at byte %lld; figures show what came before\n",
+                 s.log_break_offset);
+  return kExitOk;
+}
+
+}  // namespace
+
+void registerMonitorCommands(CLI::App& app, cli::Registry& registry) {
+  auto so = std::make_shared<SpyOptions>();
+  CLI::App* spy = app.add_subcommand("spy", "lcm-spy with the overstep types on its class path");
+  spy->add_option("--lcm-url", so->lcm_url, "LCM URL (default: LCM_DEFAULT_URL or udpm default)");
+  spy->add_flag("--print-classpath", so->print_classpath,
+                "Print the class path (lcm.jar + overstep_msgs.jar) and exit (headless check)");
+  spy->footer(
+      "Examples:\n"
+      "  overstep spy                                  # live bus, default URL\n"
+      "  overstep spy --lcm-url udpm://239.255.76.67:7667?ttl=0\n"
+      "  lcm-logplayer --lcm-url=udpm://239.255.76.67:7700?ttl=0 runs/<run>/bus.lcmlog &\n"
+      "  overstep spy --lcm-url udpm://239.255.76.67:7700?ttl=0   # a recorded run\n"
+      "Exit: 2 without a display (use ssh -X, or overstep monitor).");
+  registry.add(spy, [so] { return runSpy(*so); });
+
+  auto mo = std::make_shared<MonitorOptions>();
+  CLI::App* mon = app.add_subcommand("monitor",
+                                     "Terminal view of a live bus or a log: rates, runtime, plan, "
+                                     "stabilizer, simulator");
+  mon->add_option("log", mo->source, "An LCM log to read instead of the live bus");
+  mon->add_option("--lcm-url", mo->lcm_url, "LCM URL of the live bus");
+  mon->add_flag("--once", mo->once,
+                "Print one snapshot and exit (live: after --duration s; log: at its end)");
+  mon->add_flag("--json", mo->json, "Snapshots as JSON (one object per line)");
+  mon->add_option("--duration", mo->duration, "Live --once: seconds to listen")
+      ->capture_default_str();
+  mon->add_option("--speed", mo->speed, "Log playback speed (0: as fast as possible)")
+      ->capture_default_str();
+  mon->add_option("--interval", mo->interval, "Refresh period, s")->capture_default_str();
+  mon->add_option("--window", mo->window, "Rate window, s")->capture_default_str();
+  mon->footer(
+      "Examples:\n"
+      "  overstep monitor                              # live, default LCM URL\n"
+      "  overstep monitor --lcm-url udpm://239.255.76.67:7700?ttl=0\n"
+      "  overstep monitor runs/<run>/bus.lcmlog --speed 4\n"
+      "  overstep monitor runs/<run>/bus.lcmlog --once --json | jq .channels\n"
+      "Rates: RATE Hz over the last --window s of the receive clock; MSG Hz by the messages'\n"
+      "own timestamps (robot time in a lock-step simulation). Exit 2 on a damaged log\n"
+      "(the snapshot shows what came before the break).");
+  registry.add(mon, [mo] { return runMonitor(*mo); });
+
+  auto eo = std::make_shared<ExportOptions>();
+  eo->robot = cli::defaultRobotPath();
+  CLI::App* ex =
+      app.add_subcommand("export", "Every channel of an LCM log to CSV, units in the header");
+  ex->add_option("log", eo->log, "LCM log")->required();
+  ex->add_option("--csv", eo->dir, "Output folder (one CSV per channel)")->required();
+  ex->add_option("--robot", eo->robot, "Robot YAML naming the joint columns ('' for indices)")
+      ->capture_default_str();
+  ex->add_flag("--json", eo->json, "Print {events, rows, files, break_offset} as JSON");
+  ex->footer(
+      "Examples:\n"
+      "  overstep export runs/<run>/bus.lcmlog --csv runs/<run>/csv\n"
+      "  overstep export bus.lcmlog --csv out --json | jq .rows\n"
+      "Columns: log_time [us] (logger receive time), type, then every field, e.g.\n"
+      "'q[RLEG_JOINT0] [rad]'. Exit 2 on a damaged log after exporting what came before.");
+  registry.add(ex, [eo] { return runExport(*eo); });
+
+  auto ro = std::make_shared<ReportCliOptions>();
+  ro->r.robot = cli::defaultRobotPath();
+  CLI::App* rep = app.add_subcommand("report", "Figures and an HTML page: plan vs measurement");
+  rep->add_option("run_dir", ro->r.run_dir, "Run folder (plan.json + bus.lcmlog), e.g. from demo")
+      ->required();
+  rep->add_option("--robot", ro->r.robot, "Robot YAML")->capture_default_str();
+  rep->add_option("--plan", ro->r.plan, "Plan file (default RUN_DIR/plan.json)");
+  rep->add_option("--log", ro->r.log, "LCM log (default RUN_DIR/bus.lcmlog)");
+  rep->add_option("--out", ro->r.out, "Output folder (default RUN_DIR/report)");
+  rep->add_option("--frames", ro->r.frames, "Snapshots in the side-view sequence")
+      ->capture_default_str();
+  rep->add_option("--python", ro->r.python, "Python with Matplotlib")->capture_default_str();
+  rep->add_flag("--json", ro->json, "Print {figures, index, ticks, t_range} as JSON");
+  rep->footer(
+      "Examples:\n"
+      "  overstep report runs/20261122-101500          # -> runs/.../report/index.html\n"
+      "  overstep report runs/<run> --frames 12 --json\n"
+      "Figures (docs/report.md): side-view sequence, whole-body vs table-cart ZMP, pelvis\n"
+      "roll/pitch, foot wrenches, leg joints with limits, local CoP per foot.");
+  registry.add(rep, [ro] { return runReport(*ro); });
+}
+
+}  // namespace overstep

@@ -1,0 +1,366 @@
+#include "overstep/monitor/report.hpp"
+
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "overstep/core/error.hpp"
+#include "overstep/core/plan.hpp"
+#include "overstep/monitor/lcm_log.hpp"
+#include "overstep/monitor/messages.hpp"
+#include "overstep/robots/collision.hpp"
+#include "overstep/robots/whole_body_model.hpp"
+#include "overstep/runtime/plan_track.hpp"
+
+namespace overstep::monitor {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* const kLegJoints[12] = {"RLEG_JOINT0", "RLEG_JOINT1", "RLEG_JOINT2", "RLEG_JOINT3",
+                                    "RLEG_JOINT4", "RLEG_JOINT5", "LLEG_JOINT0", "LLEG_JOINT1",
+                                    "LLEG_JOINT2", "LLEG_JOINT3", "LLEG_JOINT4", "LLEG_JOINT5"};
+
+/// Roll and pitch of a rotation (x-y-z fixed axes: yaw-pitch-roll decomposition).
+Eigen::Vector2d rollPitch(const Eigen::Matrix3d& R) {
+  return {std::atan2(R(2, 1), R(2, 2)), std::asin(std::clamp(-R(2, 0), -1.0, 1.0))};
+}
+
+/// One aligned tick.
+struct Row {
+  double t = 0.0;
+  int phase = 0;
+  int index = 0;  // plan sample
+  Eigen::Vector2d zmp_meas = Eigen::Vector2d::Zero(), zmp_ref = Eigen::Vector2d::Zero();
+  core::Vector6d w_meas[2];  // sole frame [M; F]
+  Eigen::VectorXd q_meas, q_cmd;
+  Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
+  bool ground_truth = false;
+  Eigen::Quaterniond imu = Eigen::Quaterniond::Identity();
+  double stab_level = 0.0;  // largest correction in units of 1 mrad / 1 mm
+  int stab_mode = 0;
+};
+
+std::string defaultScript() {
+  return (fs::path(OVERSTEP_DATA_DIR) / "monitor" / "python" / "report_plots.py").string();
+}
+
+void setMeasured(robots::WholeBodyModel& model, const Row& r, int base_frame, Eigen::VectorXd& q) {
+  q.setZero(model.dofs());
+  for (int j = 0; j < r.q_meas.size() && j < model.actuatedCount(); ++j)
+    q(model.actuatedCoordinate(j)) = r.q_meas(j);
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(model.dofs()), a = v;
+  model.anchorBase(base_frame, r.base, q, v, a);
+}
+
+nlohmann::json capsules(robots::WholeBodyModel& model, const std::vector<int>& frames) {
+  const auto& d = model.description();
+  nlohmann::json out = nlohmann::json::array();
+  for (std::size_t c = 0; c < d.capsules.size(); ++c) {
+    const Eigen::Isometry3d X = model.framePose(frames[c]);
+    const Eigen::Vector3d a = X * d.capsules[c].p0, b = X * d.capsules[c].p1;
+    out.push_back({{"link", d.capsules[c].link},
+                   {"p0", {a.x(), a.y(), a.z()}},
+                   {"p1", {b.x(), b.y(), b.z()}},
+                   {"r", d.capsules[c].radius}});
+  }
+  return out;
+}
+
+}  // namespace
+
+int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
+  ReportOptions o = o_in;
+  if (o.plan.empty()) o.plan = (fs::path(o.run_dir) / "plan.json").string();
+  if (o.log.empty()) o.log = (fs::path(o.run_dir) / "bus.lcmlog").string();
+  if (o.out.empty()) o.out = (fs::path(o.run_dir) / "report").string();
+  if (!fs::exists(o.plan)) throw InputError(o.plan + ": no plan in the run folder");
+  if (!fs::exists(o.log)) throw InputError(o.log + ": no LCM log in the run folder");
+  const core::Plan plan = core::loadPlan(o.plan);
+  robots::WholeBodyModel model = robots::WholeBodyModel::fromFile(o.robot);
+  runtime::PlanTrack track(plan, model);  // validates the plan against the robot
+  const auto& d = model.description();
+  const int nA = model.actuatedCount();
+  const double mg = model.totalMass() * d.gravity;
+  std::array<int, 12> leg{};
+  for (int i = 0; i < 12; ++i) {
+    leg[static_cast<std::size_t>(i)] = d.actuatedIndex(kLegJoints[i]);
+    if (leg[static_cast<std::size_t>(i)] < 0)
+      throw InputError(std::string("robot lacks ") + kLegJoints[i]);
+  }
+  const int base_frame = model.frameIndex(d.base_link);
+  std::vector<int> cap_frames;
+  for (const auto& c : d.capsules) cap_frames.push_back(model.frameIndex(c.link));
+
+  // ---- align the log: one row per PLAN_REF / STABILIZER pair, with the latest state and command.
+  LogReader reader(o.log);
+  LogEvent ev;
+  AnyMessage msg;
+  std::optional<overstep::robot_state_t> state;
+  std::optional<overstep::robot_command_t> command;
+  std::optional<overstep::plan_reference_t> ref;
+  std::vector<Row> rows;
+  while (reader.next(ev)) {
+    if (decode(ev.data, ev.size, msg) != DecodeStatus::Ok) continue;
+    if (auto* s = std::get_if<overstep::robot_state_t>(&msg)) state = *s;
+    if (auto* c = std::get_if<overstep::robot_command_t>(&msg)) command = *c;
+    if (auto* p = std::get_if<overstep::plan_reference_t>(&msg)) ref = *p;
+    auto* st = std::get_if<overstep::stabilizer_status_t>(&msg);
+    if (!st || !ref || ref->seq != st->seq || !state || !command) continue;
+    if (state->num_joints != nA || command->num_joints != nA) continue;
+    const double t = ref->plan_time;
+    if (!rows.empty() && t <= rows.back().t) {
+      if (t == 0.0 && rows.size() == 1)
+        rows.pop_back();  // keep the last tick at the start
+      else
+        continue;  // paused, finished or lingering
+    }
+    Row r;
+    r.t = t;
+    r.phase = ref->phase;
+    r.index = std::clamp(static_cast<int>(std::lround(t * plan.rate)), 0, plan.samples() - 1);
+    r.zmp_meas << st->zmp_measured[0], st->zmp_measured[1];
+    r.zmp_ref << st->zmp_reference[0], st->zmp_reference[1];
+    r.q_meas = Eigen::Map<const Eigen::VectorXd>(state->q.data(), nA);
+    r.q_cmd = Eigen::Map<const Eigen::VectorXd>(command->q_ref.data(), nA);
+    for (int f = 0; f < 2; ++f) {
+      const double* ft = f == 0 ? state->ft_right : state->ft_left;
+      core::Vector6d w;
+      for (int i = 0; i < 6; ++i) w(i) = ft[i];
+      r.w_meas[f] = track.soleWrench(r.index, f, w);
+    }
+    r.ground_truth = state->has_ground_truth;
+    if (r.ground_truth) {
+      r.base.translation() << state->base_position[0], state->base_position[1],
+          state->base_position[2];
+      r.base.linear() = Eigen::Quaterniond(state->base_quaternion[0], state->base_quaternion[1],
+                                           state->base_quaternion[2], state->base_quaternion[3])
+                            .normalized()
+                            .toRotationMatrix();
+    }
+    r.imu = Eigen::Quaterniond(state->imu_quaternion[0], state->imu_quaternion[1],
+                               state->imu_quaternion[2], state->imu_quaternion[3])
+                .normalized();
+    double level = 0.0;
+    for (int i = 0; i < 2; ++i)
+      level = std::max({level, std::abs(st->right_foot_rotation[i]) / 1e-3,
+                        std::abs(st->left_foot_rotation[i]) / 1e-3,
+                        std::abs(st->body_attitude[i]) / 1e-3});
+    for (int i = 0; i < 3; ++i) level = std::max(level, std::abs(st->com_offset[i]) / 1e-3);
+    r.stab_level = level;
+    r.stab_mode = st->mode;
+    rows.push_back(std::move(r));
+  }
+  sum.log_break_offset = reader.breakOffset();
+  if (rows.size() < 2) {
+    throw InputError(o.log + ": no executed plan ticks in the log (OVERSTEP_PLAN_REF, " +
+                     "OVERSTEP_STABILIZER, OVERSTEP_STATE and OVERSTEP_COMMAND are needed)");
+  }
+
+  // ---- ticks.csv
+  const fs::path data = fs::path(o.out) / "data";
+  std::error_code ec;
+  fs::create_directories(data, ec);
+  if (ec) throw InputError(data.string() + ": cannot create the report folder");
+  std::string csv =
+      "t,phase,zmp_wb_x,zmp_wb_y,zmp_tc_x,zmp_tc_y,zmp_ref_x,zmp_ref_y,zmp_meas_x,zmp_meas_y,"
+      "roll_plan,pitch_plan,roll_meas,pitch_meas,stab_level,stab_mode";
+  const char* side[2] = {"right", "left"};
+  const char* comp[6] = {"Fx", "Fy", "Fz", "Mx", "My", "Mz"};
+  for (const char* s : side) {
+    for (const char* c : comp) csv += std::string(",") + s + "_" + c + "_plan";
+    for (const char* c : comp) csv += std::string(",") + s + "_" + c + "_meas";
+    csv += std::string(",") + s + "_cop_x_plan," + s + "_cop_y_plan," + s + "_cop_x_meas," + s +
+           "_cop_y_meas," + s + "_contact";
+  }
+  for (const char* j : kLegJoints)
+    csv += std::string(",") + j + "_plan," + j + "_cmd," + j + "_meas";
+  csv += "\n";
+  Eigen::VectorXd qm;
+  char buf[64];
+  auto num = [&](double v) {
+    std::snprintf(buf, sizeof buf, ",%.6g", v);
+    csv += buf;
+  };
+  const double fz_min = 0.05 * mg;  // CoP undefined below 5 % of the weight
+  for (const Row& r : rows) {
+    const int k = r.index;
+    std::snprintf(buf, sizeof buf, "%.4f,%d", r.t, r.phase);
+    csv += buf;
+    num(plan.zmp_wholebody(0, k));
+    num(plan.zmp_wholebody(1, k));
+    num(plan.zmp_tablecart(0, k));
+    num(plan.zmp_tablecart(1, k));
+    num(r.zmp_ref.x());
+    num(r.zmp_ref.y());
+    num(r.zmp_meas.x());
+    num(r.zmp_meas.y());
+    model.setPositions(plan.q.col(k));
+    const Eigen::Vector2d rp_plan = rollPitch(model.framePose(base_frame).linear());
+    Eigen::Vector2d rp_meas;
+    if (r.ground_truth) {
+      rp_meas = rollPitch(r.base.linear());
+    } else {
+      rp_meas = rollPitch(r.imu.toRotationMatrix());
+    }
+    num(rp_plan.x());
+    num(rp_plan.y());
+    num(rp_meas.x());
+    num(rp_meas.y());
+    num(r.stab_level);
+    csv += "," + std::to_string(r.stab_mode);
+    for (int f = 0; f < 2; ++f) {
+      const Eigen::MatrixXd& pw = f == 0 ? plan.right_wrench : plan.left_wrench;
+      const Eigen::MatrixXd& pf = f == 0 ? plan.right_foot : plan.left_foot;
+      const Eigen::Matrix3d Rt = Eigen::Quaterniond(pf(3, k), pf(4, k), pf(5, k), pf(6, k))
+                                     .normalized()
+                                     .toRotationMatrix()
+                                     .transpose();
+      const Eigen::Vector3d mp = Rt * pw.col(k).head<3>(), fp = Rt * pw.col(k).tail<3>();
+      const Eigen::Vector3d mm = r.w_meas[f].head<3>(), fm = r.w_meas[f].tail<3>();
+      for (int i = 0; i < 3; ++i) num(fp(i));
+      for (int i = 0; i < 3; ++i) num(mp(i));
+      for (int i = 0; i < 3; ++i) num(fm(i));
+      for (int i = 0; i < 3; ++i) num(mm(i));
+      const bool contact = f == 0 ? plan.phases[static_cast<std::size_t>(r.phase)].right_contact
+                                  : plan.phases[static_cast<std::size_t>(r.phase)].left_contact;
+      const double nan = std::nan("");
+      num(fp.z() > fz_min ? -mp.y() / fp.z() : nan);
+      num(fp.z() > fz_min ? mp.x() / fp.z() : nan);
+      num(fm.z() > fz_min ? -mm.y() / fm.z() : nan);
+      num(fm.z() > fz_min ? mm.x() / fm.z() : nan);
+      csv += contact ? ",1" : ",0";
+    }
+    for (int i = 0; i < 12; ++i) {
+      const int a = leg[static_cast<std::size_t>(i)];
+      num(plan.q(model.actuatedCoordinate(a), k));
+      num(r.q_cmd(a));
+      num(r.q_meas(a));
+    }
+    csv += "\n";
+  }
+  core::writeFileAtomic((data / "ticks.csv").string(), csv);
+
+  // ---- meta.json
+  nlohmann::json meta;
+  meta["run_dir"] = o.run_dir;
+  meta["plan"] = o.plan;
+  meta["log"] = o.log;
+  meta["duration"] = plan.duration();
+  meta["ground_truth"] = rows.back().ground_truth;
+  meta["log_break_offset"] = sum.log_break_offset;
+  nlohmann::json phases = nlohmann::json::array();
+  for (const auto& p : plan.phases)
+    phases.push_back({{"name", p.name},
+                      {"start", p.start},
+                      {"duration", p.duration},
+                      {"right_contact", p.right_contact},
+                      {"left_contact", p.left_contact}});
+  meta["phases"] = phases;
+  nlohmann::json joints = nlohmann::json::array();
+  for (int i = 0; i < 12; ++i) {
+    const auto& aj = d.actuated[static_cast<std::size_t>(leg[static_cast<std::size_t>(i)])];
+    joints.push_back({{"name", aj.name},
+                      {"lower", aj.lower},
+                      {"upper", aj.upper},
+                      {"safe_lower", aj.safeLower()},
+                      {"safe_upper", aj.safeUpper()}});
+  }
+  meta["joints"] = joints;
+  nlohmann::json cfg = nlohmann::json::parse(plan.config_json, nullptr, false);
+  meta["cop_box"] =
+      cfg.is_object() && cfg.contains("cop_box") ? cfg["cop_box"].get<double>() : 0.01;
+  meta["pelvis_tilt"] =
+      cfg.is_object() && cfg.contains("pelvis_tilt") ? cfg["pelvis_tilt"].get<double>() : 0.005;
+  for (int f = 0; f < 2; ++f) {
+    const auto* fd = d.foot(side[f]);
+    meta["soles"][side[f]] = {{"x_front", fd->sole.x_front},
+                              {"x_back", -fd->sole.x_back},
+                              {"y_min", fd->yMin()},
+                              {"y_max", fd->yMax()}};
+  }
+  const robots::ObstacleGeometry og =
+      robots::ObstacleGeometry::fromSpec(plan.obstacle, plan.toes_x);
+  meta["obstacle"] = {
+      {"shape", plan.obstacle.shape == core::ObstacleSpec::Shape::Box ? "box" : "cylinder"},
+      {"x_min", plan.obstacle.nearX(plan.toes_x)},
+      {"x_max", plan.obstacle.farX(plan.toes_x)},
+      {"height", plan.obstacle.envelopeHeight()},
+      {"centre", {og.centre.x(), og.centre.y(), og.centre.z()}},
+      {"radius", og.radius}};
+  core::writeFileAtomic((data / "meta.json").string(), meta.dump(1));
+
+  // ---- frames.json: the side-view sequence, plan and measurement at the same plan times.
+  nlohmann::json frames = nlohmann::json::array();
+  const int nf = std::max(2, o.frames);
+  for (int i = 0; i < nf; ++i) {
+    const double t = rows.front().t + (rows.back().t - rows.front().t) * i / (nf - 1);
+    std::size_t best = 0;
+    for (std::size_t k = 0; k < rows.size(); ++k)
+      if (std::abs(rows[k].t - t) < std::abs(rows[best].t - t)) best = k;
+    const Row& r = rows[best];
+    nlohmann::json fr;
+    fr["t"] = r.t;
+    fr["phase"] = plan.phases[static_cast<std::size_t>(r.phase)].name;
+    model.setPositions(plan.q.col(r.index));
+    fr["plan"] = capsules(model, cap_frames);
+    if (r.ground_truth) {
+      setMeasured(model, r, base_frame, qm);
+      fr["measured"] = capsules(model, cap_frames);
+    } else {
+      fr["measured"] = nullptr;
+    }
+    frames.push_back(fr);
+  }
+  core::writeFileAtomic((data / "frames.json").string(), frames.dump());
+
+  sum.out_dir = o.out;
+  sum.ticks = static_cast<int>(rows.size());
+  sum.t_begin = rows.front().t;
+  sum.t_end = rows.back().t;
+  return sum.ticks;
+}
+
+ReportSummary makeReport(const ReportOptions& o_in) {
+  ReportOptions o = o_in;
+  if (o.out.empty()) o.out = (fs::path(o.run_dir) / "report").string();
+  if (o.script.empty()) o.script = defaultScript();
+  ReportSummary sum;
+  writeReportData(o, sum);
+  if (!fs::exists(o.script)) throw InputError(o.script + ": plotting script not found");
+  const std::string cmd = o.python + " " + o.script + " " + o.out;
+  std::vector<char*> argv = {const_cast<char*>(o.python.c_str()),
+                             const_cast<char*>(o.script.c_str()), const_cast<char*>(o.out.c_str()),
+                             nullptr};
+  pid_t pid = -1;
+  int rc = posix_spawnp(&pid, o.python.c_str(), nullptr, nullptr, argv.data(), environ);
+  if (rc != 0) throw std::runtime_error("report: cannot start " + o.python);
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    throw std::runtime_error("report: the plotting script failed (" + cmd + ", status " +
+                             std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
+                             "); is python3-matplotlib installed?");
+  }
+  sum.index_html = (fs::path(o.out) / "index.html").string();
+  sum.manifest = (fs::path(o.out) / "report.json").string();
+  std::ifstream in(sum.manifest);
+  const nlohmann::json man = nlohmann::json::parse(in, nullptr, false);
+  if (man.is_discarded() || !man.contains("figures"))
+    throw std::runtime_error("report: " + sum.manifest + " missing or unreadable");
+  for (const auto& f : man["figures"])
+    sum.figures.push_back((fs::path(o.out) / f["file"].get<std::string>()).string());
+  return sum;
+}
+
+}  // namespace overstep::monitor
