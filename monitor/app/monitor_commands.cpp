@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -28,8 +29,10 @@ namespace fs = std::filesystem;
 double wallSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
-double epochSeconds() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+std::int64_t epochMicros() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
 }
 
 // ------------------------------------------------------------------------------------- spy
@@ -82,7 +85,8 @@ struct MonitorOptions {
   double window = 1.0;
 };
 
-void show(const monitor::Monitor& m, double now, const std::string& src, bool json, bool tty) {
+void show(const monitor::Monitor& m, std::int64_t now, const std::string& src, bool json,
+          bool tty) {
   if (json) {
     std::cout << m.snapshot(now, src).dump() << std::endl;
     return;
@@ -98,19 +102,20 @@ int monitorLog(const MonitorOptions& o) {
   monitor::LogEvent ev;
   const bool tty = ::isatty(STDOUT_FILENO) != 0;
   cli::StopSignals stop;
-  double first = -1.0, last_show = -1e9, now = 0.0;
+  std::int64_t first = -1, last_show = std::numeric_limits<std::int64_t>::min() / 2, now = 0;
   const double wall0 = wallSeconds();
   while (reader.next(ev)) {
-    now = static_cast<double>(ev.timestamp) * 1e-6;
-    if (first < 0.0) first = now;
+    now = ev.timestamp;
+    if (first < 0) first = now;
     if (!o.once && o.speed > 0.0) {  // play at the recorded pace
-      const double due = wall0 + (now - first) / o.speed;
+      const double due = wall0 + static_cast<double>(now - first) * 1e-6 / o.speed;
       while (wallSeconds() < due && !stop.requested())
         std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
     if (stop.requested()) break;
     mon.add(ev.channel, now, ev.data, ev.size);
-    if (!o.once && now - last_show >= o.interval * std::max(o.speed, 1.0)) {
+    if (!o.once &&
+        static_cast<double>(now - last_show) * 1e-6 >= o.interval * std::max(o.speed, 1.0)) {
       show(mon, now, o.source, o.json, tty);
       last_show = now;
     }
@@ -128,8 +133,7 @@ class LiveFeed {
  public:
   explicit LiveFeed(monitor::Monitor& m) : m_(m) {}
   void handle(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    m_.add(channel, static_cast<double>(rbuf->recv_utime) * 1e-6, rbuf->data,
-           static_cast<int>(rbuf->data_size));
+    m_.add(channel, rbuf->recv_utime, rbuf->data, static_cast<int>(rbuf->data_size));
   }
 
  private:
@@ -155,11 +159,11 @@ int monitorLive(const MonitorOptions& o) {
       continue;
     }
     if (w - last_show >= o.interval) {
-      show(mon, epochSeconds(), src, o.json, tty);
+      show(mon, epochMicros(), src, o.json, tty);
       last_show = w;
     }
   }
-  if (o.once) show(mon, epochSeconds(), src, o.json, false);
+  if (o.once) show(mon, epochMicros(), src, o.json, false);
   return o.once || !stop.requested() ? kExitOk : kExitInterrupted;
 }
 
@@ -309,6 +313,7 @@ void registerMonitorCommands(CLI::App& app, cli::Registry& registry) {
   rep->add_option("--frames", ro->r.frames, "Snapshots in the side-view sequence")
       ->capture_default_str();
   rep->add_option("--python", ro->r.python, "Python with Matplotlib")->capture_default_str();
+  rep->add_option("--dpi", ro->r.dpi, "PNG resolution")->capture_default_str();
   rep->add_flag("--json", ro->json, "Print {figures, index, ticks, t_range} as JSON");
   rep->footer(
       "Examples:\n"

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Draws the figures of `overstep report` from the data that the C++ side wrote.
 
-Usage: report_plots.py REPORT_DIR   (reads REPORT_DIR/data/{ticks.csv,meta.json,frames.json};
+Usage: report_plots.py REPORT_DIR [DPI]   (reads REPORT_DIR/data/{ticks.csv,meta.json,frames.json};
 writes REPORT_DIR/fig*.png, index.html and report.json, the manifest of every figure: its file,
 title, and per axes the plotted series and their time range).
 
@@ -24,6 +24,7 @@ PLAN = dict(color="tab:blue", lw=1.2)
 MEAS = dict(color="tab:red", lw=1.0)
 OTHER = dict(color="tab:green", lw=1.0, ls="--")
 DPI = 80
+STABILIZER_SHADE = 5.0  # shade where a correction reaches 5 mrad / 5 mm (stab_level is in 1 mrad / 1 mm)
 
 
 def load(out):
@@ -135,7 +136,7 @@ def fig_wrenches(out, c, meta, man):
 def stabilizer_spans(c):
     spans, start = [], None
     for t, lvl in zip(c["t"], c["stab_level"]):
-        on = lvl >= 1.0
+        on = lvl >= STABILIZER_SHADE
         if on and start is None:
             start = t
         if not on and start is not None:
@@ -172,7 +173,7 @@ def fig_joints(out, c, meta, man):
     for ax in axs[-1]:
         ax.set_xlabel("plan time (s)")
     fig.suptitle("Leg joints (rad): plan, reference, measured; limits solid, safety limits dotted;\n"
-                 "yellow: stabilizer correcting by 1 mrad / 1 mm or more (seed Fig. 6)", fontsize=10)
+                 "yellow: stabilizer correcting by 5 mrad / 5 mm or more (seed Fig. 6)", fontsize=10)
     fig.tight_layout()
     man.add(out, fig, "fig6_joints.png", "Leg joint angles", recs)
 
@@ -189,7 +190,8 @@ def fig_cop(out, c, meta, man):
         xp = [x if ct else math.nan for x, ct in zip(c[f"{side}_cop_x_plan"], c[f"{side}_contact"])]
         yp = [y if ct else math.nan for y, ct in zip(c[f"{side}_cop_y_plan"], c[f"{side}_contact"])]
         ax.plot(xp, yp, label="plan", **PLAN)
-        ax.plot(c[f"{side}_cop_x_meas"], c[f"{side}_cop_y_meas"], label="measured", **MEAS)
+        ax.plot(c[f"{side}_cop_x_meas"], c[f"{side}_cop_y_meas"], ".", ms=2, color=MEAS["color"],
+                label="measured")
         ax.set_aspect("equal")
         ax.set_xlabel("x (m, sole frame)")
         ax.set_ylabel("y (m)")
@@ -268,9 +270,12 @@ def write_index(out, man, meta):
 
 
 def main():
-    if len(sys.argv) != 2:
-        sys.exit("usage: report_plots.py REPORT_DIR")
+    global DPI
+    if len(sys.argv) not in (2, 3):
+        sys.exit("usage: report_plots.py REPORT_DIR [DPI]")
     out = sys.argv[1]
+    if len(sys.argv) == 3:
+        DPI = int(sys.argv[2])
     c, meta, frames = load(out)
     man = Manifest()
     fig_sequence(out, frames, meta, man)

@@ -13,6 +13,37 @@ namespace {
 constexpr std::int64_t kHeaderBytes = 4 + 8 + 8 + 4 + 4;  // sync, number, time, lengths
 }
 
+namespace {
+
+std::int64_t bigEndian(const unsigned char* p, int n) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < n; ++i) v = (v << 8) | p[i];
+  if (n == 4) return static_cast<std::int32_t>(static_cast<std::uint32_t>(v));
+  return static_cast<std::int64_t>(v);
+}
+
+}  // namespace
+
+/// Why liblcm returned nothing at `at`: looks at the event header there (for the message only;
+/// liblcm also refuses an intact event that is not followed by a valid header or the end).
+std::string LogReader::diagnose(FILE* f, std::int64_t at) const {
+  const std::int64_t left = size_ - at;
+  if (left < kHeaderBytes)
+    return "truncated event header (" + std::to_string(left) + " bytes left)";
+  unsigned char h[kHeaderBytes];
+  if (fseeko(f, at, SEEK_SET) != 0 || fread(h, 1, sizeof h, f) != sizeof h)
+    return "unreadable event header";
+  if (static_cast<std::uint32_t>(bigEndian(h, 4)) != 0xEDA1DA01u) return "no sync word";
+  const std::int64_t channel = bigEndian(h + 20, 4), data = bigEndian(h + 24, 4);
+  if (channel <= 0 || channel >= 1000 || data < 0)
+    return "invalid channel or data length in the event header";
+  const std::int64_t end = at + kHeaderBytes + channel + data;
+  if (end > size_)
+    return "truncated event: it needs " + std::to_string(end - at) + " bytes, the file has " +
+           std::to_string(left) + " left";
+  return "no valid event header at byte " + std::to_string(end) + " (after this event)";
+}
+
 LogReader::LogReader(const std::string& path) : path_(path) {
   struct stat sb {};
   if (::stat(path.c_str(), &sb) != 0 || !S_ISREG(sb.st_mode)) {
@@ -37,10 +68,7 @@ bool LogReader::next(LogEvent& ev) {
   if (e == nullptr) {
     done_ = true;
     break_offset_ = before;
-    break_reason_ =
-        size_ - before < kHeaderBytes
-            ? "truncated event header (" + std::to_string(size_ - before) + " bytes left)"
-            : "truncated or corrupt event (no complete event from here to the end)";
+    break_reason_ = diagnose(f, before);
     return false;
   }
   const std::int64_t after = ftello(f);

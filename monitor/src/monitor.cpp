@@ -7,7 +7,7 @@ namespace overstep::monitor {
 
 double ChannelStats::meanRate() const {
   if (count < 2 || last_recv <= first_recv) return 0.0;
-  return static_cast<double>(count - 1) / (last_recv - first_recv);
+  return static_cast<double>(count - 1) / (static_cast<double>(last_recv - first_recv) * 1e-6);
 }
 
 double ChannelStats::messageClockRate() const {
@@ -15,10 +15,11 @@ double ChannelStats::messageClockRate() const {
   return static_cast<double>(decoded - 1) / (static_cast<double>(last_utime - first_utime) * 1e-6);
 }
 
-double ChannelStats::windowRate(double now, double window) const {
+double ChannelStats::windowRate(std::int64_t now_us, double window) const {
   int n = 0;
-  for (double t : recent)
-    if (t > now - window && t <= now) ++n;
+  const auto w = static_cast<std::int64_t>(window * 1e6);
+  for (std::int64_t t : recent)
+    if (t > now_us - w && t <= now_us) ++n;
   return window > 0.0 ? n / window : 0.0;
 }
 
@@ -32,7 +33,7 @@ const char* stabilizerModeName(int mode) {
   return mode >= 0 && mode < 5 ? names[mode] : "?";
 }
 
-void Monitor::add(const std::string& channel, double recv_time, const void* data, int size) {
+void Monitor::add(const std::string& channel, std::int64_t recv_time, const void* data, int size) {
   ChannelStats& c = channels_[channel];
   if (c.count == 0) {
     c.channel = channel;
@@ -42,7 +43,9 @@ void Monitor::add(const std::string& channel, double recv_time, const void* data
   c.bytes += size;
   c.last_recv = recv_time;
   c.recent.push_back(recv_time);
-  while (!c.recent.empty() && c.recent.front() < recv_time - 2.0 * window_) c.recent.pop_front();
+  while (!c.recent.empty() &&
+         c.recent.front() < recv_time - static_cast<std::int64_t>(2e6 * window_))
+    c.recent.pop_front();
   if (decode(data, size, scratch_) != DecodeStatus::Ok) {
     ++c.undecodable;
     return;
@@ -74,9 +77,9 @@ std::string saturationNames(int mask) {
 }
 }  // namespace
 
-nlohmann::json Monitor::snapshot(double now, const std::string& source) const {
+nlohmann::json Monitor::snapshot(std::int64_t now, const std::string& source) const {
   nlohmann::json j;
-  j["time"] = now;
+  j["time"] = static_cast<double>(now) * 1e-6;
   j["source"] = source;
   nlohmann::json ch = nlohmann::json::object();
   for (const auto& [name, c] : channels_) {
@@ -87,7 +90,7 @@ nlohmann::json Monitor::snapshot(double now, const std::string& source) const {
                 {"rate_hz", c.meanRate()},
                 {"window_rate_hz", c.windowRate(now, window_)},
                 {"message_clock_rate_hz", c.messageClockRate()},
-                {"last_age_s", now - c.last_recv}};
+                {"last_age_s", static_cast<double>(now - c.last_recv) * 1e-6}};
   }
   j["channels"] = ch;
   j["runtime"] = nullptr;
@@ -118,8 +121,8 @@ nlohmann::json Monitor::snapshot(double now, const std::string& source) const {
                  {"progress", p.plan_duration > 0 ? p.plan_time / p.plan_duration : 0.0},
                  {"phase", p.phase},
                  {"phase_name", p.phase_name},
-                 {"right_contact", p.right_contact},
-                 {"left_contact", p.left_contact}};
+                 {"right_contact", p.right_contact != 0},
+                 {"left_contact", p.left_contact != 0}};
   }
   j["stabilizer"] = nullptr;
   if (stab_) {
@@ -145,11 +148,11 @@ nlohmann::json Monitor::snapshot(double now, const std::string& source) const {
     j["sim"] = {{"time", s.sim_time},
                 {"real_time_factor", s.real_time_factor},
                 {"contacts", s.num_contacts},
-                {"right_foot_contact", s.right_foot_contact},
-                {"left_foot_contact", s.left_foot_contact},
-                {"fell", s.fell},
-                {"obstacle_contact", s.obstacle_contact},
-                {"holding", s.holding},
+                {"right_foot_contact", s.right_foot_contact != 0},
+                {"left_foot_contact", s.left_foot_contact != 0},
+                {"fell", s.fell != 0},
+                {"obstacle_contact", s.obstacle_contact != 0},
+                {"holding", s.holding != 0},
                 {"rejected_commands", s.rejected_commands}};
   }
   j["robot"] = nullptr;
@@ -166,7 +169,7 @@ nlohmann::json Monitor::snapshot(double now, const std::string& source) const {
   return j;
 }
 
-std::string Monitor::render(double now, const std::string& source) const {
+std::string Monitor::render(std::int64_t now, const std::string& source) const {
   std::string out;
   char buf[256];
   auto line = [&](const char* fmt, auto... args) {
@@ -174,12 +177,15 @@ std::string Monitor::render(double now, const std::string& source) const {
     out += buf;
     out += '\n';
   };
-  line("overstep monitor  %s  t = %.1f s", source.c_str(), now);
+  std::int64_t start = now;
+  for (const auto& kv : channels_) start = std::min(start, kv.second.first_recv);
+  line("overstep monitor  %s  %.1f s since the first message", source.c_str(),
+       static_cast<double>(now - start) * 1e-6);
   line("%-24s %-20s %9s %9s %9s %8s", "CHANNEL", "TYPE", "COUNT", "RATE Hz", "MSG Hz", "AGE s");
   for (const auto& [name, c] : channels_) {
     line("%-24s %-20s %9lld %9.1f %9.1f %8.2f", name.c_str(), c.type.empty() ? "?" : c.type.c_str(),
          static_cast<long long>(c.count), c.windowRate(now, window_), c.messageClockRate(),
-         now - c.last_recv);
+         static_cast<double>(now - c.last_recv) * 1e-6);
   }
   if (channels_.empty()) line("(no messages yet)");
   out += '\n';

@@ -334,13 +334,15 @@ ReportSummary makeReport(const ReportOptions& o_in) {
   ReportOptions o = o_in;
   if (o.out.empty()) o.out = (fs::path(o.run_dir) / "report").string();
   if (o.script.empty()) o.script = defaultScript();
+  if (o.dpi < 20 || o.dpi > 400) throw InputError("--dpi: expected 20..400");
   ReportSummary sum;
   writeReportData(o, sum);
   if (!fs::exists(o.script)) throw InputError(o.script + ": plotting script not found");
-  const std::string cmd = o.python + " " + o.script + " " + o.out;
+  const std::string dpi = std::to_string(o.dpi);
+  const std::string cmd = o.python + " " + o.script + " " + o.out + " " + dpi;
   std::vector<char*> argv = {const_cast<char*>(o.python.c_str()),
                              const_cast<char*>(o.script.c_str()), const_cast<char*>(o.out.c_str()),
-                             nullptr};
+                             const_cast<char*>(dpi.c_str()), nullptr};
   pid_t pid = -1;
   int rc = posix_spawnp(&pid, o.python.c_str(), nullptr, nullptr, argv.data(), environ);
   if (rc != 0) throw std::runtime_error("report: cannot start " + o.python);

@@ -41,6 +41,10 @@ TEST_F(DemoLcm, SmallObstacleRunWritesAConsistentVerdict) {
   for (const char* f : {"plan.json", "replay.json", "sim.json", "verdict.json", "bus.lcmlog"})
     EXPECT_TRUE(fs::is_regular_file(run / f)) << f;
   EXPECT_GT(fs::file_size(run / "bus.lcmlog"), 100000u) << "the bus was recorded";
+  // The report is drawn at the end of the run.
+  ASSERT_TRUE(v.contains("report") && v["report"].is_string()) << v.dump();
+  EXPECT_TRUE(fs::is_regular_file(v["report"].get<std::string>()));
+  EXPECT_TRUE(fs::is_regular_file(run / "report" / "fig5_wrenches.png"));
   // The verdict is the simulator's ground truth, not the runtime's opinion.
   const json s = json::parse(test::slurp((run / "sim.json").string()));
   EXPECT_EQ(v["fell"], s["fell"]);

@@ -1,12 +1,14 @@
 #pragma once
 /// \file
 /// Sequential reading of an LCM log (lcm-logger's format) through liblcm's reader, with the byte
-/// offset of every event and of the first place the file stops making sense. liblcm skips bytes
-/// until the next sync word and returns nothing on a short read; both are reported here as a
-/// break (offset, reason) instead of passing silently, and reading stops there, so everything
-/// before the break is intact.
+/// offset of every event and of the first place the file stops making sense. liblcm returns
+/// nothing on a short read or when an event is not followed by a valid header (1.3), or skips
+/// bytes to the next sync word (newer versions); each is reported here as a break (the offset of
+/// the first event not returned, and the reason, naming the damaged byte where it can) instead of
+/// passing silently, and reading stops there, so everything before the break is intact.
 
 #include <cstdint>
+#include <cstdio>
 #include <memory>
 #include <string>
 
@@ -43,6 +45,7 @@ class LogReader {
   const std::string& path() const { return path_; }
 
  private:
+  std::string diagnose(FILE* f, std::int64_t at) const;
   std::string path_;
   std::unique_ptr<lcm::LogFile> log_;
   std::int64_t size_ = 0;

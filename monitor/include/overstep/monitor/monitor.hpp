@@ -21,33 +21,33 @@ struct ChannelStats {
   std::int64_t count = 0;
   std::int64_t undecodable = 0;  ///< foreign or malformed messages
   std::int64_t bytes = 0;
-  double first_recv = 0.0, last_recv = 0.0;  ///< s, receive clock
+  std::int64_t first_recv = 0, last_recv = 0;  ///< us, receive clock
   std::int64_t first_utime = 0, last_utime = 0;
   std::int64_t decoded = 0;
-  std::deque<double> recent;  ///< receive times inside the rate window
+  std::deque<std::int64_t> recent;  ///< receive times (us) inside the rate window
 
   /// Mean rate over everything received, receive clock (Hz); 0 below two messages.
   double meanRate() const;
   /// Rate by the messages' own timestamps (utime): the publisher's clock (robot time in a
   /// lock-step simulation); 0 below two decoded messages.
   double messageClockRate() const;
-  /// Rate over the last `window` seconds before `now` (receive clock).
-  double windowRate(double now, double window) const;
+  /// Rate over the last `window` seconds before `now_us` (receive clock).
+  double windowRate(std::int64_t now_us, double window) const;
 };
 
 class Monitor {
  public:
   explicit Monitor(double window_s = 1.0) : window_(window_s) {}
-  /// One message received at `recv_time` (s, the receive clock: wall time live, the logger's
+  /// One message received at `recv_us` (us, the receive clock: wall time live, the logger's
   /// timestamps on a log).
-  void add(const std::string& channel, double recv_time, const void* data, int size);
+  void add(const std::string& channel, std::int64_t recv_us, const void* data, int size);
 
   const std::map<std::string, ChannelStats>& channels() const { return channels_; }
   /// Snapshot as JSON: {time, source, channels: {NAME: {...}}, runtime, plan, stabilizer, sim,
   /// robot}. Sections without data are null.
-  nlohmann::json snapshot(double now, const std::string& source) const;
+  nlohmann::json snapshot(std::int64_t now_us, const std::string& source) const;
   /// The terminal view (plain text, fits 100 columns).
-  std::string render(double now, const std::string& source) const;
+  std::string render(std::int64_t now_us, const std::string& source) const;
 
  private:
   double window_;

@@ -21,6 +21,7 @@ struct ReportOptions {
   std::string python = "/usr/bin/python3";  ///< Debian's, where python3-matplotlib lives
   std::string script;  ///< default: monitor/python/report_plots.py of this source tree
   int frames = 8;      ///< snapshots in the side-view sequence
+  int dpi = 80;        ///< PNG resolution
 };
 
 struct ReportSummary {

@@ -1,0 +1,259 @@
+// Monitoring library: log reading and damaged logs, decoding, CSV export round trip, rates.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "log_fixtures.hpp"
+#include "overstep/core/error.hpp"
+#include "overstep/monitor/export.hpp"
+#include "overstep/monitor/lcm_log.hpp"
+#include "overstep/monitor/messages.hpp"
+#include "overstep/monitor/monitor.hpp"
+#include "test_util.hpp"
+
+namespace overstep {
+namespace {
+
+using test::SyntheticLog;
+using test::TempDir;
+
+/// Minimal CSV reader (our files: quoted text fields may hold commas and doubled quotes).
+std::vector<std::vector<std::string>> readCsv(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<std::vector<std::string>> rows;
+  std::string line;
+  while (std::getline(in, line)) {
+    std::vector<std::string> f;
+    std::string cur;
+    bool q = false;
+    for (std::size_t i = 0; i < line.size(); ++i) {
+      const char c = line[i];
+      if (q) {
+        if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+          cur += '"';
+          ++i;
+        } else if (c == '"') {
+          q = false;
+        } else {
+          cur += c;
+        }
+      } else if (c == '"') {
+        q = true;
+      } else if (c == ',') {
+        f.push_back(cur);
+        cur.clear();
+      } else {
+        cur += c;
+      }
+    }
+    f.push_back(cur);
+    rows.push_back(f);
+  }
+  return rows;
+}
+
+int column(const std::vector<std::string>& header, const std::string& name) {
+  for (std::size_t i = 0; i < header.size(); ++i)
+    if (header[i] == name) return static_cast<int>(i);
+  return -1;
+}
+
+void truncateFile(const std::string& path, std::int64_t size) {
+  std::filesystem::resize_file(path, static_cast<std::uintmax_t>(size));
+}
+
+TEST(MonitorLog, ReadsEveryEventWithItsOffset) {
+  TempDir dir;
+  const SyntheticLog log = test::writeSyntheticLog(dir.file("a.lcmlog"), 1.0, 7);
+  monitor::LogReader r(dir.file("a.lcmlog"));
+  monitor::LogEvent ev;
+  std::size_t i = 0;
+  while (r.next(ev)) {
+    ASSERT_LT(i, log.events.size());
+    EXPECT_EQ(ev.offset, log.events[i].offset);
+    EXPECT_EQ(ev.timestamp, log.events[i].timestamp);
+    EXPECT_EQ(ev.channel, log.events[i].channel);
+    ASSERT_EQ(ev.size, static_cast<int>(log.events[i].data.size()));
+    EXPECT_EQ(0, std::memcmp(ev.data, log.events[i].data.data(), log.events[i].data.size()));
+    ++i;
+  }
+  EXPECT_EQ(i, log.events.size());
+  EXPECT_FALSE(r.broken());
+}
+
+TEST(MonitorLog, MissingFileIsBadInput) {
+  EXPECT_THROW(monitor::LogReader("/nonexistent/x.lcmlog"), InputError);
+}
+
+TEST(MonitorDecode, KnowsOurTypesAndRejectsOthers) {
+  monitor::AnyMessage m;
+  const auto st = test::encodeMsg(test::makeState(30));
+  ASSERT_EQ(monitor::decode(st.data(), static_cast<int>(st.size()), m), monitor::DecodeStatus::Ok);
+  EXPECT_EQ(monitor::typeName(m), "robot_state_t");
+  const auto ss = test::encodeMsg(test::makeSimStatus());
+  ASSERT_EQ(monitor::decode(ss.data(), static_cast<int>(ss.size()), m), monitor::DecodeStatus::Ok);
+  EXPECT_EQ(monitor::typeName(m), "sim_status_t");
+  const std::uint8_t junk[12] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};
+  EXPECT_EQ(monitor::decode(junk, 12, m), monitor::DecodeStatus::UnknownType);
+  // Our fingerprint, but cut short: malformed.
+  EXPECT_EQ(monitor::decode(st.data(), static_cast<int>(st.size()) - 9, m),
+            monitor::DecodeStatus::Malformed);
+}
+
+TEST(MonitorDecode, FlattensEveryFieldWithUnits) {
+  std::vector<monitor::Cell> cells;
+  monitor::AnyMessage m = test::makeState(30);
+  std::vector<std::string> names;
+  for (int i = 0; i < 30; ++i) names.push_back("J" + std::to_string(i));
+  monitor::flatten(m, names, cells);
+  // utime, seq, last_command_seq, num_joints, 3 x 30 joints, 2 x 6 F/T, 4 + 3 + 3 IMU,
+  // has_ground_truth, 3 + 4 + 3 + 3 base.
+  EXPECT_EQ(cells.size(), 4u + 90u + 12u + 10u + 1u + 13u);
+  bool found = false;
+  for (const auto& c : cells)
+    if (c.name == "q[J3]") {
+      found = true;
+      EXPECT_EQ(c.unit, "rad");
+    }
+  EXPECT_TRUE(found);
+  for (const auto& c : cells) {
+    if (c.name == "ft_left[Mz]") {
+      EXPECT_EQ(c.unit, "N m");
+    }
+  }
+  monitor::flatten(m, {}, cells);  // no names: indices
+  EXPECT_EQ(cells[4].name, "q[0]");
+}
+
+TEST(MonitorExport, CsvRoundTripsEveryValueExactly) {
+  TempDir dir;
+  const SyntheticLog log = test::writeSyntheticLog(dir.file("a.lcmlog"), 0.5, 11);
+  const auto sum = monitor::exportCsv(dir.file("a.lcmlog"), dir.file("csv"), {});
+  EXPECT_EQ(sum.break_offset, -1);
+  EXPECT_EQ(sum.events, static_cast<std::int64_t>(log.events.size()));
+  EXPECT_EQ(sum.skipped.at("OTHER_TOOL"), 1);
+  ASSERT_EQ(sum.rows.at("OVERSTEP_STATE"), static_cast<std::int64_t>(log.states.size()));
+  const auto rows = readCsv(sum.files.at("OVERSTEP_STATE"));
+  ASSERT_EQ(rows.size(), log.states.size() + 1);
+  const auto& h = rows[0];
+  EXPECT_EQ(h[0], "log_time [us]");
+  const int utime = column(h, "utime [us]"), q7 = column(h, "q[7] [rad]"),
+            fz = column(h, "ft_right[Fz] [N]");
+  ASSERT_GE(utime, 0);
+  ASSERT_GE(q7, 0);
+  ASSERT_GE(fz, 0);
+  for (std::size_t k = 0; k < log.states.size(); ++k) {
+    const auto& r = rows[k + 1];
+    EXPECT_EQ(std::stoll(r[static_cast<std::size_t>(utime)]), log.states[k].utime);
+    EXPECT_EQ(std::strtod(r[static_cast<std::size_t>(q7)].c_str(), nullptr), log.states[k].q[7]);
+    EXPECT_EQ(std::strtod(r[static_cast<std::size_t>(fz)].c_str(), nullptr),
+              log.states[k].ft_right[2]);
+  }
+  const auto rt = readCsv(sum.files.at("OVERSTEP_RUNTIME"));
+  const int reason = column(rt[0], "fault_reason");
+  ASSERT_GE(reason, 0);
+  EXPECT_EQ(rt[1][static_cast<std::size_t>(reason)], log.statuses[0].fault_reason);
+}
+
+TEST(MonitorExport, TruncatedLogExportsEverythingBeforeTheBreak) {
+  TempDir dir;
+  const SyntheticLog log = test::writeSyntheticLog(dir.file("a.lcmlog"), 0.5, 3);
+  const std::size_t cut = log.events.size() * 2 / 3;
+  truncateFile(dir.file("a.lcmlog"), log.events[cut].offset + 30);  // inside event `cut`
+  const auto sum = monitor::exportCsv(dir.file("a.lcmlog"), dir.file("csv"), {});
+  EXPECT_EQ(sum.break_offset, log.events[cut].offset);
+  EXPECT_EQ(sum.events, static_cast<std::int64_t>(cut));
+  std::int64_t states = 0;
+  for (std::size_t i = 0; i < cut; ++i) states += log.events[i].channel == "OVERSTEP_STATE";
+  EXPECT_EQ(sum.rows.at("OVERSTEP_STATE"), states);
+  EXPECT_EQ(readCsv(sum.files.at("OVERSTEP_STATE")).size(), static_cast<std::size_t>(states + 1));
+}
+
+TEST(MonitorExport, CorruptSyncWordIsReportedAtItsOffset) {
+  TempDir dir;
+  const SyntheticLog log = test::writeSyntheticLog(dir.file("a.lcmlog"), 0.5, 5);
+  const std::size_t bad = log.events.size() / 3;
+  {
+    std::fstream f(dir.file("a.lcmlog"), std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(log.events[bad].offset);
+    f.write("XXXX", 4);  // the sync word of event `bad`
+  }
+  const auto sum = monitor::exportCsv(dir.file("a.lcmlog"), dir.file("csv"), {});
+  // liblcm 1.3 refuses an event that is not followed by a valid header: the break is the event
+  // before the damaged one, and the reason names the damaged byte.
+  EXPECT_EQ(sum.break_offset, log.events[bad - 1].offset);
+  EXPECT_EQ(sum.events, static_cast<std::int64_t>(bad - 1));
+  EXPECT_NE(sum.break_reason.find(std::to_string(log.events[bad].offset)), std::string::npos)
+      << sum.break_reason;
+}
+
+TEST(MonitorExport, UndecodablePayloadOfOurTypeIsABreak) {
+  TempDir dir;
+  const std::string path = dir.file("a.lcmlog");
+  std::int64_t bad_offset = 0;
+  {
+    lcm::LogFile file(path, "w");
+    auto put = [&](std::vector<std::uint8_t> data) {
+      lcm::LogEvent le{};
+      le.timestamp = 1;
+      le.channel = "OVERSTEP_STATE";
+      le.datalen = static_cast<int32_t>(data.size());
+      le.data = data.data();
+      file.writeEvent(&le);
+    };
+    put(test::encodeMsg(test::makeState(30)));
+    bad_offset = ftello(file.getFilePtr());
+    auto cut = test::encodeMsg(test::makeState(30));
+    cut.resize(cut.size() / 2);  // our fingerprint, half a message
+    put(cut);
+    put(test::encodeMsg(test::makeState(30)));
+  }
+  const auto sum = monitor::exportCsv(path, dir.file("csv"), {});
+  EXPECT_EQ(sum.break_offset, bad_offset);
+  EXPECT_EQ(sum.rows.at("OVERSTEP_STATE"), 1);
+}
+
+TEST(MonitorRates, MatchTheLogsTimestamps) {
+  TempDir dir;
+  const SyntheticLog log = test::writeSyntheticLog(dir.file("a.lcmlog"), 2.0, 13);
+  monitor::Monitor mon(1.0);
+  monitor::LogReader r(dir.file("a.lcmlog"));
+  monitor::LogEvent ev;
+  std::int64_t now = 0;
+  while (r.next(ev)) {
+    now = ev.timestamp;
+    mon.add(ev.channel, now, ev.data, ev.size);
+  }
+  for (const char* ch : {"OVERSTEP_STATE", "OVERSTEP_RUNTIME"}) {
+    std::int64_t n = 0, first = -1, last = 0;
+    for (const auto& e : log.events) {
+      if (e.channel != ch) continue;
+      if (first < 0) first = e.timestamp;
+      last = e.timestamp;
+      ++n;
+    }
+    const double expected = static_cast<double>(n - 1) / (static_cast<double>(last - first) * 1e-6);
+    const auto& c = mon.channels().at(ch);
+    EXPECT_EQ(c.count, n);
+    EXPECT_NEAR(c.meanRate(), expected, 1e-12 * expected) << ch;
+  }
+  // The messages' own clock: exactly the control and status rates.
+  EXPECT_NEAR(mon.channels().at("OVERSTEP_STATE").messageClockRate(), log.control_rate, 1e-6);
+  EXPECT_NEAR(mon.channels().at("OVERSTEP_RUNTIME").messageClockRate(), log.status_rate, 1e-6);
+  EXPECT_EQ(mon.channels().at("OTHER_TOOL").undecodable, 1);
+  const auto snap = mon.snapshot(now, "test");
+  EXPECT_EQ(snap["channels"]["OVERSTEP_STATE"]["type"], "robot_state_t");
+  EXPECT_FALSE(snap["runtime"].is_null());
+  EXPECT_TRUE(snap["plan"].is_null());  // no OVERSTEP_PLAN_REF in this log
+  // Window rate over the last second: 200 messages (+-1 for the jittered edges).
+  EXPECT_NEAR(mon.channels().at("OVERSTEP_STATE").windowRate(now, 1.0), log.control_rate, 1.5);
+  const std::string text = mon.render(now, "test");
+  EXPECT_NE(text.find("OVERSTEP_STATE"), std::string::npos);
+  EXPECT_NE(text.find("runtime"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace overstep
