@@ -192,6 +192,29 @@ TEST_F(MonitorCli, SpyClassPathHoldsEveryTypeAndTheSpy) {
   EXPECT_NE(headless.err.find("DISPLAY"), std::string::npos) << headless.err;
 }
 
+TEST_F(MonitorCli, LiveMonitorSeesTheSimulatorAtItsRate) {
+  // The simulator in real time publishes its state at 200 Hz; the monitor listens for 1.5 s.
+  test::ProcessGuard guard;
+  const pid_t sim =
+      guard.add(test::spawnOverstep("sim --realtime --no-obstacle --duration 6",
+                                    dir_->file("live_sim.out"), dir_->file("live_sim.err")));
+  usleep(2000000);  // the simulator settles the robot before it starts publishing
+  const auto r = test::runOverstep("monitor --once --json --duration 1.5");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const json snap = json::parse(r.out);
+  ASSERT_TRUE(snap["channels"].contains("OVERSTEP_STATE")) << r.out;
+  const auto& st = snap["channels"]["OVERSTEP_STATE"];
+  EXPECT_EQ(st["type"], "robot_state_t");
+  // Wall-clock pacing on a loaded 2-core machine: a wide band around 200 Hz.
+  EXPECT_GT(st["window_rate_hz"].get<double>(), 150.0);
+  EXPECT_LT(st["window_rate_hz"].get<double>(), 250.0);
+  EXPECT_NEAR(st["message_clock_rate_hz"].get<double>(), 200.0, 1.0);
+  EXPECT_LT(st["last_age_s"].get<double>(), 0.2);
+  EXPECT_FALSE(snap["sim"].is_null());
+  kill(sim, SIGINT);
+  test::waitOverstep(sim, 10.0);
+}
+
 TEST_F(MonitorCli, BadInputIsExitTwoWithOneLine) {
   for (const std::string& args : std::vector<std::string>{
            "monitor /nonexistent.lcmlog --once",
