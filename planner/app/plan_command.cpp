@@ -25,10 +25,10 @@ namespace {
 constexpr double kReachableHeight = 0.45;
 
 struct PlanOptions {
-  std::string robot, config, out = "plan.json", shape = "box";
+  std::string robot, config, out = "plan.json", shape = "box", warm_start;
   double height = 0.20, width = 0.11, gap = 0.03, margin = 0.0, time_limit = 0.0, rate = 200.0;
   int threads = 0;
-  bool json = false;
+  bool json = false, resample = false;
   double stand = 0.0;  ///< > 0: write a static standing plan of this duration instead of solving
 };
 
@@ -86,6 +86,19 @@ int runPlan(const PlanOptions& o) {
                           std::to_string(kReachableHeight) + " m for this robot): no plan exists");
   }
   planner::OverstepProblem problem(model, cfg, ob);
+  Eigen::VectorXd warm;
+  if (!o.warm_start.empty()) {
+    const core::Plan wp = core::loadPlan(o.warm_start);
+    const nlohmann::json ws = nlohmann::json::parse(wp.summary_json, nullptr, false);
+    if (!ws.is_object() || !ws.contains("x") || !ws["x"].is_array())
+      throw InputError(o.warm_start + ": no solution vector (summary.x) to start from");
+    const auto xs = ws["x"].get<std::vector<double>>();
+    warm = Eigen::Map<const Eigen::VectorXd>(xs.data(), static_cast<Eigen::Index>(xs.size()));
+    if (warm.size() != problem.layout().total)
+      throw InputError(o.warm_start + ": " + std::to_string(warm.size()) +
+                       " variables, this configuration has " +
+                       std::to_string(problem.layout().total));
+  }
   std::fprintf(log, "overstep plan: %d variables, %d inequalities, %d equalities, %s, %d threads\n",
                problem.layout().total, problem.inequalityCount(), problem.equalityCount(),
                cfg.solver.algorithm.c_str(), cfg.solver.threads);
@@ -98,13 +111,30 @@ int runPlan(const PlanOptions& o) {
   };
   auto solver = planner::makeNloptSolver(cfg.solver, row, &cli::StopSignals::flag());
   const cli::StopSignals stop(false);  // Ctrl-C stops the solve and keeps the best so far
-  const planner::PlanOutcome out = planner::planOverstep(
-      problem, *solver, cfg.solver.time_limit,
-      [log](const std::string& s) {
-        std::fprintf(log, "-- %s\n", s.c_str());
-        std::fflush(log);
-      },
-      row, &cli::StopSignals::flag());
+  planner::PlanOutcome out;
+  if (o.resample) {
+    // No solve: the stored solution, evaluated and sampled with this configuration.
+    if (warm.size() == 0) throw InputError("--resample needs --warm-start PLAN");
+    out.final.x = warm;
+    problem.evaluate(warm, out.final.evaluation);
+    out.final.objective = out.final.evaluation.objective;
+    out.final.status = "resampled";
+    for (int f = 0; f < static_cast<int>(planner::Family::kCount); ++f) {
+      const double wv = out.final.evaluation.worst[static_cast<std::size_t>(f)];
+      out.final.max_violation = std::max(out.final.max_violation, wv);
+      if (wv > planner::kFeasibilityTolerance)
+        out.violated.push_back(planner::familyName(static_cast<planner::Family>(f)));
+    }
+    out.valid = out.final.max_violation <= planner::kFeasibilityTolerance;
+  } else {
+    out = planner::planOverstep(
+        problem, *solver, cfg.solver.time_limit,
+        [log](const std::string& s) {
+          std::fprintf(log, "-- %s\n", s.c_str());
+          std::fflush(log);
+        },
+        row, &cli::StopSignals::flag(), warm.size() ? &warm : nullptr);
+  }
 
   const Eigen::VectorXd& x = out.final.x;
   nlohmann::json summary;
@@ -120,6 +150,7 @@ int runPlan(const PlanOptions& o) {
   summary["iterations"] = out.iterations;
   summary["evaluations"] = problem.evaluationCount();
   summary["objective"] = out.final.objective;
+  summary["x"] = std::vector<double>(x.data(), x.data() + x.size());  // for --warm-start
   nlohmann::json terms;
   for (std::size_t i = 0; i < planner::objectiveTermNames().size(); ++i)
     terms[planner::objectiveTermNames()[i]] = out.final.evaluation.terms[i];
@@ -253,6 +284,12 @@ void registerPlanCommands(CLI::App& app, cli::Registry& registry) {
   plan->add_option("--rate", po->rate, "Sample rate of the plan file, Hz")->capture_default_str();
   plan->add_option("--stand", po->stand,
                    "Write a static standing plan of this many seconds instead (runtime bring-up)");
+  plan->add_option("--warm-start", po->warm_start,
+                   "Start from the solution stored in a plan file (same configuration): only the "
+                   "target stage runs");
+  plan->add_flag("--resample", po->resample,
+                 "With --warm-start: no solve, write the stored solution sampled with this "
+                 "configuration (e.g. another --rate)");
   plan->add_flag("--json", po->json,
                  "Print the summary as one JSON object on stdout (progress on stderr)");
   plan->footer(
@@ -260,6 +297,7 @@ void registerPlanCommands(CLI::App& app, cli::Registry& registry) {
       "  overstep plan                                   # 20 cm x 11 cm bar -> plan.json\n"
       "  overstep plan --obstacle-height 0.05 --out small.json\n"
       "  overstep plan --obstacle-shape cylinder --json > summary.json\n"
+      "  overstep plan --obstacle-height 0.05 --warm-start small.failed.json --out small.json\n"
       "Exit: 0 valid plan written; 2 bad input; 3 no valid plan (best attempt in\n"
       "<out>.failed.json); 130 interrupted (Ctrl-C keeps the best attempt).");
   registry.add(plan, [po] { return runPlan(*po); });

@@ -65,6 +65,10 @@ std::string PlannerConfig::toJson() const {
   j["min_normal_force"] = min_normal_force;
   j["swing_clearance"] = swing_clearance;
   j["obstacle_clearance"] = obstacle_clearance;
+  j["swept_clearance"] = swept_clearance;
+  j["passive_polish"] = passive_polish;
+  j["approach_samples"] = approach_samples;
+  j["velocity_margin"] = velocity_margin;
   j["self_clearance"] = self_clearance;
   j["pelvis_tilt"] = pelvis_tilt;
   j["leg_reach"] = leg_reach;
@@ -111,7 +115,11 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
                                          "height_homotopy_step",
                                          "head_pitch_offset",
                                          "limit_margin",
-                                         "ds_balance_band"};
+                                         "ds_balance_band",
+                                         "swept_clearance",
+                                         "passive_polish",
+                                         "approach_samples",
+                                         "velocity_margin"};
   std::map<std::string, double*> fields = {{"start_half_width", &c.start_half_width},
                                            {"step_length_min", &c.step_length_min},
                                            {"step_length_max", &c.step_length_max},
@@ -134,14 +142,20 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
                                            {"height_homotopy_step", &c.height_homotopy_step},
                                            {"head_pitch_offset", &c.head_pitch_offset},
                                            {"limit_margin", &c.limit_margin},
-                                           {"ds_balance_band", &c.ds_balance_band}};
+                                           {"ds_balance_band", &c.ds_balance_band},
+                                           {"swept_clearance", &c.swept_clearance},
+                                           {"passive_polish", &c.passive_polish},
+                                           {"approach_samples", &c.approach_samples},
+                                           {"velocity_margin", &c.velocity_margin}};
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>();
     const YAML::Node& v = kv.second;
     if (scalars.count(key)) {
       *fields.at(key) = key == "head_pitch_offset" ? r.value(v, key)
-                        : key == "ds_balance_band" ? r.valueAtLeast(v, key, 0.0)
-                                                   : r.positiveValue(v, key);
+                        : key == "ds_balance_band" || key == "swept_clearance" ||
+                                key == "passive_polish" || key == "approach_samples"
+                            ? r.valueAtLeast(v, key, 0.0)
+                            : r.positiveValue(v, key);
     } else if (key == "samples_per_phase") {
       c.samples_per_phase = r.perPhase<int>(v, key);
     } else if (key == "spline_intervals") {

@@ -232,14 +232,40 @@ struct OverstepProblem::Impl {
       const int nph = cfg.samples_per_phase[static_cast<std::size_t>(i)];
       const auto& ph = phaseTable()[static_cast<std::size_t>(i)];
       const bool closed = !(ph.right_contact && ph.left_contact) || i + 1 == kPhaseCount;
-      for (int k = 0; k <= (closed ? nph : nph - 1); ++k)
-        grid.push_back({i, static_cast<double>(k) / nph, 0.0});
+      for (int k = 0; k <= (closed ? nph : nph - 1); ++k) {
+        // Approach sample: half an interval before a lift-off or a touchdown, where the
+        // unloading foot's CoP and the landing sole's corners otherwise go unsampled (measured:
+        // 1 cm of CoP beyond the box in the last 15 ms before lift-off, 1 mm of corner below the
+        // ground before touchdown). Constraint rows only (no objective weight).
+        if (cfg.approach_samples > 0.0 && k == nph - 1 && i + 1 < kPhaseCount)
+          grid.push_back({i, (nph - 0.5) / nph, 0.0});
+        if (k < nph || closed) grid.push_back({i, static_cast<double>(k) / nph, 0.0});
+      }
     }
+    std::stable_sort(grid.begin(), grid.end(), [](const GridPoint& x, const GridPoint& y) {
+      return x.phase != y.phase ? x.phase < y.phase : x.s < y.s;
+    });
     for (const auto& g : grid) {
       const auto& ph = phaseTable()[static_cast<std::size_t>(g.phase)];
       const bool ds = ph.right_contact && ph.left_contact;
       ineq_off.push_back(n_ineq);
       eq_off.push_back(n_eq);
+      if (isApproach(g)) {
+        // Few rows (full rows there stalled SLSQP; measured): before a lift-off the sway
+        // balance, before a touchdown the landing sole's corners.
+        if (ds && cfg.ds_balance_band > 0.0) {
+          for (int r = 0; r < 2; ++r) ineq_fam.push_back(Family::Dynamics);
+        } else if (ds) {
+          eq_fam.push_back(Family::Dynamics);
+        } else {
+          for (int r = 0; r < 4; ++r) ineq_fam.push_back(Family::Clearance);
+        }
+        ineq_cnt.push_back(static_cast<int>(ineq_fam.size()) - n_ineq);
+        eq_cnt.push_back(static_cast<int>(eq_fam.size()) - n_eq);
+        n_ineq = static_cast<int>(ineq_fam.size());
+        n_eq = static_cast<int>(eq_fam.size());
+        continue;
+      }
       const int contacts = ds ? 2 : 1;
       for (int c = 0; c < contacts; ++c) {
         for (int r = 0; r < 4; ++r) ineq_fam.push_back(Family::CoP);
@@ -281,6 +307,12 @@ struct OverstepProblem::Impl {
       w.model = std::make_unique<robots::WholeBodyModel>(model_template);
       w.spline = std::make_unique<PhaseSpline>(cfg.spline_intervals, cfg.spline_degree);
     }
+  }
+
+  /// An approach sample: half an interval before a lift-off or a touchdown (see setUp()).
+  bool isApproach(const GridPoint& g) const {
+    const int nph = cfg.samples_per_phase[static_cast<std::size_t>(g.phase)];
+    return std::abs(g.s * nph - std::round(g.s * nph)) > 1e-9;
   }
 
   // -------------------------------------------------------------- decoding x
@@ -422,6 +454,177 @@ struct OverstepProblem::Impl {
             .norm();
   }
 
+  /// The state (q, v, a) as given, with everything buildState() derives from it: torques, the
+  /// total and per-foot contact wrenches, the sole poses, the double-support sway balance.
+  void stateFrom(Workspace& w, int phase, const Eigen::VectorXd& q, const Eigen::VectorXd& v,
+                 const Eigen::VectorXd& a) const {
+    robots::WholeBodyModel& m = *w.model;
+    State& st = w.st;
+    const auto& ph = phaseTable()[static_cast<std::size_t>(phase)];
+    st.q = q;
+    st.v = v;
+    st.a = a;
+    st.contact[kRight] = ph.right_contact;
+    st.contact[kLeft] = ph.left_contact;
+    m.setState(q, v, a);
+    st.tau = m.inverseDynamics();
+    st.W_O = m.contactWrenchFromBase(st.tau);
+    for (int f = 0; f < 2; ++f) st.sole[f] = m.framePose(sole_frame[f]);
+    distributeWrench(w);
+  }
+
+  /// The passive (elastic) equations of motion at the current state: in single support the four
+  /// elastic joints' residuals (N m), in double support the sway balance about the feet's line.
+  Eigen::VectorXd passiveResidual(Workspace& w, int phase) const {
+    const State& st = w.st;
+    const auto& ph = phaseTable()[static_cast<std::size_t>(phase)];
+    if (ph.right_contact && ph.left_contact) return Eigen::VectorXd::Constant(1, st.ds_balance);
+    const int stance = ph.right_contact ? kRight : kLeft;
+    const Eigen::MatrixXd J = w.model->frameJacobian(sole_frame[stance]);
+    Eigen::VectorXd r(4);
+    for (int f = 0; f < 2; ++f)
+      for (int e = 0; e < 2; ++e) {
+        const int c = flex_coord[static_cast<std::size_t>(2 * f + e)];
+        r(2 * f + e) = st.tau(c) - (f == stance ? J.col(c).dot(st.wrench[f]) : 0.0);
+      }
+    return r;
+  }
+
+  /// Directions (columns, tangent space) in which the passive coordinates can move with every
+  /// actuated joint held and the stance sole(s) fixed: single support, each elastic joint with the
+  /// base following the stance foot; double support, the whole body rotating about the line
+  /// through both bushing centres (both bushings deflect along it, the joints stay).
+  Eigen::MatrixXd passiveDirections(Workspace& w, int phase, const Eigen::VectorXd& q) const {
+    robots::WholeBodyModel& m = *w.model;
+    const auto& ph = phaseTable()[static_cast<std::size_t>(phase)];
+    const int anchor = ph.base_foot == Foot::Right ? kRight : kLeft;
+    const bool ds = ph.right_contact && ph.left_contact;
+    m.setPositions(q);
+    const Eigen::Isometry3d X = m.framePose(sole_frame[anchor]);
+    const double eps = 1e-6;
+    const int cols = ds ? 1 : 4;
+    Eigen::MatrixXd U(m.dofs(), cols);
+    Eigen::Vector4d dir[4];
+    if (ds) {
+      const Eigen::Vector3d line = (m.framePose(sole_frame[kLeft]).translation() -
+                                    m.framePose(sole_frame[kRight]).translation())
+                                       .normalized();
+      Eigen::Vector4d d4;
+      for (int f = 0; f < 2; ++f) {
+        const Eigen::Matrix3d R = m.framePose(sole_frame[f]).linear();
+        d4(2 * f) = R.col(0).dot(line);      // roll: about the foot's x
+        d4(2 * f + 1) = R.col(1).dot(line);  // pitch: about the foot's y
+      }
+      dir[0] = d4;
+    } else {
+      for (int i = 0; i < 4; ++i) dir[i] = Eigen::Vector4d::Unit(i);
+    }
+    Eigen::VectorXd v0 = Eigen::VectorXd::Zero(m.dofs()), a0 = v0;
+    for (int c = 0; c < cols; ++c) {
+      Eigen::VectorXd qp = q;
+      for (int i = 0; i < 4; ++i) qp(flex_coord[static_cast<std::size_t>(i)]) += eps * dir[c](i);
+      v0.setZero();
+      a0.setZero();
+      m.anchorBase(sole_frame[anchor], X, qp, v0, a0);
+      U.col(c) = m.difference(qp, q) / eps;
+    }
+    m.setPositions(q);
+    return U;
+  }
+
+  /// Makes the passive coordinates obey their equations of motion between the collocation
+  /// samples. The planner enforces the elastic joints' dynamics only at its samples; between them
+  /// the dense motion leaves a residual F(t) (N m). This integrates the linearised correction
+  /// delta along the passive directions U (A delta'' + B delta' + C delta = -F, A, B, C by finite
+  /// differences at every dense sample; Newmark average acceleration, 1 ms steps) and adds
+  /// U delta to q (U delta', U delta'' to v, a): the motion the robot's passive joints make under
+  /// the planned actuated trajectories. Corrections are of the order of 1e-4 rad; the actuated
+  /// joints are untouched. At a contact switch delta is carried over by least squares.
+  void polishPassive(Workspace& w, const std::vector<std::pair<double, int>>& when,
+                     std::vector<Eigen::VectorXd>& q, std::vector<Eigen::VectorXd>& v,
+                     std::vector<Eigen::VectorXd>& a) const {
+    robots::WholeBodyModel& m = *w.model;
+    const std::size_t n = when.size();
+    std::vector<Eigen::MatrixXd> U(n), A(n), B(n), C(n);
+    std::vector<Eigen::VectorXd> F(n);
+    const double h = 1e-5;
+    for (std::size_t k = 0; k < n; ++k) {
+      const int phase = when[k].second;
+      U[k] = passiveDirections(w, phase, q[k]);
+      const int c = static_cast<int>(U[k].cols());
+      stateFrom(w, phase, q[k], v[k], a[k]);
+      F[k] = passiveResidual(w, phase);
+      A[k].resize(c, c);
+      B[k].resize(c, c);
+      C[k].resize(c, c);
+      for (int j = 0; j < c; ++j) {
+        stateFrom(w, phase, q[k], v[k], a[k] + h * U[k].col(j));
+        A[k].col(j) = (passiveResidual(w, phase) - F[k]) / h;
+        stateFrom(w, phase, q[k], v[k] + h * U[k].col(j), a[k]);
+        B[k].col(j) = (passiveResidual(w, phase) - F[k]) / h;
+        stateFrom(w, phase, m.integrate(q[k], U[k].col(j), h), v[k], a[k]);
+        C[k].col(j) = (passiveResidual(w, phase) - F[k]) / h;
+      }
+    }
+    // Newmark (beta 1/4, gamma 1/2) on each interval between dense samples, in <= 1 ms steps.
+    Eigen::VectorXd d = Eigen::VectorXd::Zero(U[0].cols()), dv = d, da = d;
+    da = -A[0].fullPivLu().solve(F[0]);
+    auto apply = [&](std::size_t k) {
+      // U keeps the anchor sole fixed to first order; re-anchoring the base keeps it exactly.
+      const auto& ph = phaseTable()[static_cast<std::size_t>(when[k].second)];
+      const int anchor = ph.base_foot == Foot::Right ? kRight : kLeft;
+      m.setPositions(q[k]);
+      const Eigen::Isometry3d X = m.framePose(sole_frame[anchor]);
+      q[k] = m.integrate(q[k], U[k] * d, 1.0);
+      v[k] += U[k] * dv;
+      a[k] += U[k] * da;
+      m.anchorBase(sole_frame[anchor], X, q[k], v[k], a[k]);
+      if (ph.right_contact && ph.left_contact) {
+        // The other sole back onto its placement exactly (the correction moves it by second-order
+        // amounts): its leg's joints by inverse kinematics, as buildState() does.
+        w.st.q = q[k];
+        w.st.v = v[k];
+        w.st.a = a[k];
+        solveOtherLeg(w, 1 - anchor, otherPlacement(when[k].second, w));
+        q[k] = w.st.q;
+        v[k] = w.st.v;
+        a[k] = w.st.a;
+      }
+    };
+    apply(0);
+    for (std::size_t k = 0; k + 1 < n; ++k) {
+      if (when[k + 1].second != when[k].second) {
+        // Contact switch: carry the correction over by least squares in the new directions.
+        const auto ls = U[k + 1].colPivHouseholderQr();
+        const Eigen::VectorXd d2 = ls.solve(U[k] * d), dv2 = ls.solve(U[k] * dv);
+        d = d2;
+        dv = dv2;
+        // The acceleration from the new phase's equations (the contact wrench may jump).
+        da = A[k + 1].fullPivLu().solve(-F[k + 1] - B[k + 1] * dv - C[k + 1] * d);
+        apply(k + 1);
+        continue;
+      }
+      const double T = when[k + 1].first - when[k].first;
+      const int steps = std::max(1, static_cast<int>(std::ceil(T / 1e-3)));
+      const double dt = T / steps;
+      for (int s = 1; s <= steps; ++s) {
+        const double f = static_cast<double>(s) / steps;
+        const Eigen::MatrixXd As = (1 - f) * A[k] + f * A[k + 1];
+        const Eigen::MatrixXd Bs = (1 - f) * B[k] + f * B[k + 1];
+        const Eigen::MatrixXd Cs = (1 - f) * C[k] + f * C[k + 1];
+        const Eigen::VectorXd Fs = (1 - f) * F[k] + f * F[k + 1];
+        const Eigen::VectorXd vp = dv + 0.5 * dt * da;
+        const Eigen::VectorXd dp = d + dt * dv + 0.25 * dt * dt * da;
+        const Eigen::MatrixXd K = As + 0.5 * dt * Bs + 0.25 * dt * dt * Cs;
+        const Eigen::VectorXd an = K.fullPivLu().solve(-Fs - Bs * vp - Cs * dp);
+        d = dp + 0.25 * dt * dt * an;
+        dv = vp + 0.5 * dt * an;
+        da = an;
+      }
+      apply(k + 1);
+    }
+  }
+
   /// Contact wrenches at the sole origins from the total contact wrench (and, in double support,
   /// the two elastic-ankle balances).
   void distributeWrench(Workspace& w) const {
@@ -510,6 +713,25 @@ struct OverstepProblem::Impl {
     out.ineq.resize(ineq_cnt[static_cast<std::size_t>(k)]);
     out.eq.resize(eq_cnt[static_cast<std::size_t>(k)]);
     int r = 0;
+    if (isApproach(g)) {
+      out.terms.fill(0.0);
+      out.tau = st.tau.segment(6, model_template.actuatedCount());
+      if (st.contact[kRight] && st.contact[kLeft]) {
+        if (cfg.ds_balance_band > 0.0) {
+          out.ineq(0) = (st.ds_balance - cfg.ds_balance_band) / kFlexTorqueScale;
+          out.ineq(1) = (-st.ds_balance - cfg.ds_balance_band) / kFlexTorqueScale;
+        } else {
+          out.eq(0) = st.ds_balance / kFlexTorqueScale;
+        }
+      } else {
+        const int sw = st.contact[kRight] ? kLeft : kRight;
+        const double hmin = minHeight(g.s);
+        for (double cx : {foot[sw].sole.x_front, -foot[sw].sole.x_back})
+          for (double cy : {foot[sw].yMin(), foot[sw].yMax()})
+            out.ineq(r++) = (hmin - (st.sole[sw] * Eigen::Vector3d(cx, cy, 0.0)).z()) / kDistScale;
+      }
+      return;
+    }
     const double h = 0.5 * cop_box * cfg.limit_margin;
     const double mu = cfg.friction / std::sqrt(2.0) * cfg.limit_margin;
     const double tors = cfg.torsion * cfg.limit_margin;
@@ -549,11 +771,22 @@ struct OverstepProblem::Impl {
           out.ineq(r++) = (hmin - c.z()) / kDistScale;
         }
     }
-    // Capsules in the world.
+    // Capsules in the world, and how far each can travel before the nearer sample (swept
+    // clearance; 0 when off).
     std::vector<robots::Capsule> wc(caps.size());
+    std::vector<double> sweep(caps.size(), 0.0);
+    const double half_h = 0.5 * w.timing->durations()(g.phase) /
+                          cfg.samples_per_phase[static_cast<std::size_t>(g.phase)];
     for (std::size_t i = 0; i < caps.size(); ++i) {
       const Eigen::Isometry3d X = m.framePose(caps[i].frame);
       wc[i] = {X * caps[i].p0, X * caps[i].p1, caps[i].radius};
+      if (cfg.swept_clearance > 0.0) {
+        const core::Vector6d V = m.frameVelocity(caps[i].frame);
+        const Eigen::Vector3d w0 = V.head<3>(), v0 = V.tail<3>();
+        const double s0 = (v0 + w0.cross(wc[i].p0 - X.translation())).norm();
+        const double s1 = (v0 + w0.cross(wc[i].p1 - X.translation())).norm();
+        sweep[i] = cfg.swept_clearance * half_h * std::max(s0, s1);
+      }
     }
     {
       Eigen::VectorXd dist(static_cast<Eigen::Index>(leg_caps[0].size() + leg_caps[1].size()));
@@ -563,7 +796,8 @@ struct OverstepProblem::Impl {
       const robots::ObstacleGeometry og = robots::ObstacleGeometry::fromSpec(spec, toes_x);
       for (int f = 0; f < 2; ++f)
         for (int c : leg_caps[f])
-          dist(i++) = robots::obstacleDistance(wc[static_cast<std::size_t>(c)], og);
+          dist(i++) = robots::obstacleDistance(wc[static_cast<std::size_t>(c)], og) -
+                      sweep[static_cast<std::size_t>(c)];
       out.ineq(r++) =
           (cfg.obstacle_clearance - robots::smoothMin(dist, cfg.smooth_min_rho)) / kDistScale;
     }
@@ -572,7 +806,9 @@ struct OverstepProblem::Impl {
       for (std::size_t i = 0; i < self_pairs.size(); ++i)
         dist(static_cast<Eigen::Index>(i)) =
             robots::capsuleDistance(wc[static_cast<std::size_t>(self_pairs[i].first)],
-                                    wc[static_cast<std::size_t>(self_pairs[i].second)]);
+                                    wc[static_cast<std::size_t>(self_pairs[i].second)]) -
+            sweep[static_cast<std::size_t>(self_pairs[i].first)] -
+            sweep[static_cast<std::size_t>(self_pairs[i].second)];
       out.ineq(r++) =
           (cfg.self_clearance - robots::smoothMin(dist, cfg.smooth_min_rho)) / kDistScale;
     }
@@ -590,7 +826,7 @@ struct OverstepProblem::Impl {
         ratio(2 * j) = qd / aj.velocity;
         ratio(2 * j + 1) = -qd / aj.velocity;
       }
-      out.ineq(r++) = smoothMax(ratio, kKsSharpness) - 1.0;
+      out.ineq(r++) = smoothMax(ratio, kKsSharpness) - cfg.velocity_margin;
     }
     {
       const int na = model_template.actuatedCount();
@@ -710,6 +946,7 @@ struct OverstepProblem::Impl {
         w.timing->durations()(g.phase) / cfg.samples_per_phase[static_cast<std::size_t>(g.phase)];
     const auto& ph = phaseTable()[static_cast<std::size_t>(g.phase)];
     const bool closed = !(ph.right_contact && ph.left_contact) || g.phase + 1 == kPhaseCount;
+    if (isApproach(g)) return 0.0;  // constraint rows only
     if (g.s == 1.0 || (g.s == 0.0 && closed)) return 0.5 * h;
     return h;
   }

@@ -340,7 +340,7 @@ std::unique_ptr<NlpSolver> makeNloptSolver(const SolverSettings& settings,
 PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double time_limit_s,
                          const std::function<void(const std::string&)>& on_stage,
                          const std::function<void(const IterationInfo&)>& on_restore,
-                         const std::atomic<bool>* stop) {
+                         const std::atomic<bool>* stop, const Eigen::VectorXd* warm_start) {
   const auto start = Clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
   const PlannerConfig& cfg = problem.config();
@@ -356,12 +356,29 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
   for (std::size_t i = 1; i < boxes.size(); ++i) stages.emplace_back(target_h, boxes[i]);
 
   PlanOutcome out;
-  problem.setDifficulty(stages.front().first, stages.front().second);
-  Eigen::VectorXd x = problem.initialGuess();
-  if (on_stage) on_stage("restoring feasibility of the kinematic guess (Levenberg-Marquardt)");
-  const RestorationResult rest = restoreFeasibility(problem, x, 60, stop, on_restore);
-  x = rest.x;
-  out.iterations += rest.iterations;
+  Eigen::VectorXd x;
+  if (warm_start != nullptr) {
+    if (warm_start->size() != problem.layout().total)
+      throw InputError("warm start: " + std::to_string(warm_start->size()) +
+                       " values, the problem has " + std::to_string(problem.layout().total) +
+                       " variables (another configuration?)");
+    Eigen::VectorXd lo, hi;
+    problem.bounds(lo, hi);
+    x = warm_start->cwiseMax(lo).cwiseMin(hi);
+    stages.erase(stages.begin(), stages.end() - 1);
+    problem.setDifficulty(stages.front().first, stages.front().second);
+    if (on_stage) on_stage("warm start: restoring feasibility, then only the target stage");
+    const RestorationResult rest = restoreFeasibility(problem, x, 60, stop, on_restore);
+    x = rest.x;
+    out.iterations += rest.iterations;
+  } else {
+    problem.setDifficulty(stages.front().first, stages.front().second);
+    x = problem.initialGuess();
+    if (on_stage) on_stage("restoring feasibility of the kinematic guess (Levenberg-Marquardt)");
+    const RestorationResult rest = restoreFeasibility(problem, x, 60, stop, on_restore);
+    x = rest.x;
+    out.iterations += rest.iterations;
+  }
   for (std::size_t i = 0; i < stages.size(); ++i) {
     problem.setDifficulty(stages[i].first, stages[i].second);
     if (on_stage) {
@@ -375,7 +392,7 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
       out.final.status = "time_limit";
       break;
     }
-    if (i > 0) {
+    if (i > 0 && warm_start == nullptr) {
       // A harder stage starts infeasible (e.g. violations ~2 when the CoP box halves); SLSQP's
       // identity-Hessian steps from there wander (measured). Project back first.
       const RestorationResult proj = restoreFeasibility(problem, x, 40, stop, on_restore);

@@ -52,10 +52,20 @@ core::Plan OverstepProblem::toPlan(const Eigen::VectorXd& x, double rate) {
   const int n = static_cast<int>(uniq.size());
   p.resize(n, m.model_template.dofs(), m.model_template.actuatedCount());
   robots::WholeBodyModel& model = *w.model;
+  std::vector<Eigen::VectorXd> q(static_cast<std::size_t>(n)), v(q.size()), a(q.size());
+  for (int k = 0; k < n; ++k) {
+    m.buildState(w, uniq[static_cast<std::size_t>(k)].second,
+                 uniq[static_cast<std::size_t>(k)].first);
+    q[static_cast<std::size_t>(k)] = w.st.q;
+    v[static_cast<std::size_t>(k)] = w.st.v;
+    a[static_cast<std::size_t>(k)] = w.st.a;
+  }
+  if (m.cfg.passive_polish > 0.0) m.polishPassive(w, uniq, q, v, a);
   for (int k = 0; k < n; ++k) {
     const double t = uniq[static_cast<std::size_t>(k)].first;
     const int phase = uniq[static_cast<std::size_t>(k)].second;
-    m.buildState(w, phase, t);
+    m.stateFrom(w, phase, q[static_cast<std::size_t>(k)], v[static_cast<std::size_t>(k)],
+                a[static_cast<std::size_t>(k)]);
     const State& st = w.st;
     p.t(k) = t;
     p.phase(k) = phase;

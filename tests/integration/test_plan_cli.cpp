@@ -75,12 +75,33 @@ TEST(PlanCli, SmallObstaclePipelineRunsEndToEnd) {
   EXPECT_EQ(written, r.code == 0 ? plan : dir.file("small.failed.json"));
   EXPECT_GT(summary["duration"].get<double>(), 2.0);
   EXPECT_EQ(summary["phase_durations"].size(), 5u);
-  EXPECT_EQ(summary["objective_terms"].size(), 12u);
+  EXPECT_EQ(summary["objective_terms"].size(), 13u);
+  ASSERT_TRUE(summary.contains("x"));
   const RunResult c = run("check --json " + written);
   ASSERT_TRUE(c.code == 0 || c.code == 3) << c.err;
   const auto report = nlohmann::json::parse(c.out);
   EXPECT_EQ(report["families"].size(), 12u);
   EXPECT_EQ(report["valid"].get<bool>(), c.code == 0);
+  // The check's trace: every family at every grid point.
+  const RunResult t = run("check " + written + " --trace " + dir.file("trace.csv"));
+  ASSERT_TRUE(t.code == 0 || t.code == 3) << t.err;
+  const std::string trace = test::slurp(dir.file("trace.csv"));
+  EXPECT_EQ(std::count(trace.begin(), trace.end(), '\n'), report["grid_points"].get<int>() + 1);
+  EXPECT_EQ(trace.rfind("t,cop [m],", 0), 0u) << trace.substr(0, 80);
+  // Re-sampling the stored solution without solving reproduces the same motion.
+  const RunResult re =
+      run("plan --obstacle-height 0.05 --json --config " + dir.file("relaxed.yaml") +
+          " --warm-start " + written + " --resample --out " + dir.file("re.json"));
+  ASSERT_TRUE(re.code == 0 || re.code == 3) << lastLine(re.err);
+  const auto again = nlohmann::json::parse(re.out);
+  EXPECT_EQ(again["x"], summary["x"]);
+  EXPECT_EQ(again["iterations"].get<int>(), 0);
+  EXPECT_DOUBLE_EQ(again["duration"].get<double>(), summary["duration"].get<double>());
+  // A warm start from a plan of another configuration is refused.
+  test::writeText(dir.path() / "other.yaml", "spline_intervals: [2, 5, 2, 5, 2]\n");
+  const RunResult bad = run("plan --obstacle-height 0.05 --config " + dir.file("other.yaml") +
+                            " --warm-start " + written + " --out " + dir.file("x.json"));
+  EXPECT_EQ(bad.code, 2) << bad.err;
 }
 
 // Acceptance scenario of the planner issue: a 5 cm bar with the seed's 1 cm CoP box, planned and

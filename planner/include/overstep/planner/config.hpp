@@ -49,6 +49,22 @@ struct PlannerConfig {
   /// N m. 0: the double-support sway balance is an equality at each sample; > 0: a band
   /// |residual| <= ds_balance_band (two inequality rows), easier on SLSQP with dense sampling.
   double ds_balance_band = 0.0;
+  /// Swept clearance: each leg capsule's obstacle and self-collision distance at a sample is
+  /// reduced by this factor times its fastest endpoint's speed times half the sample interval (the
+  /// farthest it can travel before the nearer sample), so that the clearance holds between
+  /// samples too. 0: off; 1: the full half-interval travel.
+  double swept_clearance = 0.0;
+  /// 1: the plan file's passive (elastic) coordinates are integrated between the collocation
+  /// samples so that they obey their equations of motion under the planned joint trajectories
+  /// (OverstepProblem::toPlan, docs/planner.md); 0: the splines as solved.
+  double passive_polish = 1.0;
+  /// 1: an extra sample half an interval before each lift-off (the sway balance only) and
+  /// touchdown (the landing sole's corners only); 0: none (default: with them SLSQP stalled at
+  /// scaled violations of 0.8-1 in every 5 cm run; docs/planner.md).
+  double approach_samples = 0.0;
+  /// Fraction of each joint's velocity limit enforced at the samples (the motion between them
+  /// overshoots; measured 9 % at 1.0).
+  double velocity_margin = 0.9;
   double height_homotopy_step = 0.05;
 
   std::map<std::string, double> weights{{"elastic_acc", 0.01},

@@ -74,10 +74,12 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
                                      const std::function<void(const IterationInfo&)>& on_iter);
 
 /// Runs the homotopy from the kinematic guess (after a feasibility restoration) to the target
-/// obstacle and CoP box.
+/// obstacle and CoP box; with `warm_start` (a solution vector of this problem's layout, e.g. a
+/// plan file's summary.x) only the target stage runs, from there.
 PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double time_limit_s,
                          const std::function<void(const std::string&)>& on_stage,
                          const std::function<void(const IterationInfo&)>& on_restore,
-                         const std::atomic<bool>* stop);
+                         const std::atomic<bool>* stop,
+                         const Eigen::VectorXd* warm_start = nullptr);
 
 }  // namespace overstep::planner
