@@ -12,6 +12,7 @@ void registerSimCommand(CLI::App& app, cli::Registry& registry);
 void registerReplayCommand(CLI::App& app, cli::Registry& registry);
 void registerDemoCommand(CLI::App& app, cli::Registry& registry);
 void registerMonitorCommands(CLI::App& app, cli::Registry& registry);
+void registerIdentifyCommand(CLI::App& app, cli::Registry& registry);
 }  // namespace overstep
 
 int main(int argc, char** argv) {
@@ -30,6 +31,7 @@ int main(int argc, char** argv) {
       "  overstep replay plan.json --start   # stream a plan through the stabilizer\n"
       "  overstep monitor                    # terminal view of the bus (or of a log)\n"
       "  overstep report runs/<run>          # figures: plan vs measurement\n"
+      "  overstep identify LOG --plan P      # what effect the model lacks\n"
       "  overstep <subcommand> --help        # options of one subcommand\n"
       "Exit codes: 0 ok, 1 internal error, 2 bad input, 3 infeasible request,\n4 a replay ended "
       "holding after a fault, 130 interrupted.");
@@ -40,6 +42,7 @@ int main(int argc, char** argv) {
   overstep::registerReplayCommand(app, registry);
   overstep::registerDemoCommand(app, registry);
   overstep::registerMonitorCommands(app, registry);
+  overstep::registerIdentifyCommand(app, registry);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -29,23 +29,27 @@ struct PlanOptions {
   double height = 0.20, width = 0.11, gap = 0.03, margin = 0.0, time_limit = 0.0, rate = 200.0;
   int threads = 0;
   bool json = false, resample = false;
-  double stand = 0.0;  ///< > 0: write a static standing plan of this duration instead of solving
+  double stand = 0.0;   ///< > 0: write a static standing plan of this duration instead of solving
+  double excite = 0.0;  ///< > 0: write an identification excitation plan of this duration
+  double amplitude = 1.0;  ///< of the excitation
 };
 
 int runStand(const PlanOptions& o) {
   robots::WholeBodyModel model = robots::WholeBodyModel::fromFile(o.robot);
-  const core::Plan plan = planner::standingPlan(model, o.stand, o.rate);
+  const bool excite = o.excite != 0.0;
+  const core::Plan plan = excite ? planner::excitationPlan(model, o.excite, o.amplitude, o.rate)
+                                 : planner::standingPlan(model, o.stand, o.rate);
   core::savePlan(plan, o.out);
   if (o.json) {
     nlohmann::json j;
-    j["status"] = "standing";
+    j["status"] = excite ? "excitation" : "standing";
     j["valid"] = true;
     j["duration"] = plan.duration();
     j["file"] = o.out;
     std::cout << j.dump(2) << "\n";
   } else {
-    std::cerr << "standing plan: " << plan.duration() << " s, " << plan.samples() << " samples -> "
-              << o.out << "\n";
+    std::cerr << (excite ? "excitation plan: " : "standing plan: ") << plan.duration() << " s, "
+              << plan.samples() << " samples -> " << o.out << "\n";
   }
   return kExitOk;
 }
@@ -57,7 +61,8 @@ std::string failedPath(const std::string& out) {
 }
 
 int runPlan(const PlanOptions& o) {
-  if (o.stand != 0.0) return runStand(o);
+  if (o.stand != 0.0 && o.excite != 0.0) throw InputError("choose one of --stand and --excite");
+  if (o.stand != 0.0 || o.excite != 0.0) return runStand(o);
   core::ObstacleSpec ob;
   ob.shape = core::parseObstacleShape(o.shape);
   ob.height = o.height;
@@ -282,6 +287,11 @@ void registerPlanCommands(CLI::App& app, cli::Registry& registry) {
   plan->add_option("--time-limit", po->time_limit,
                    "Seconds for the whole solve (default from config)");
   plan->add_option("--rate", po->rate, "Sample rate of the plan file, Hz")->capture_default_str();
+  plan->add_option("--excite", po->excite,
+                   "Write an identification experiment of this many seconds instead: standing, "
+                   "chest, head and arms swinging (overstep identify)");
+  plan->add_option("--amplitude", po->amplitude, "Scale of the --excite swings (0, 2]")
+      ->capture_default_str();
   plan->add_option("--stand", po->stand,
                    "Write a static standing plan of this many seconds instead (runtime bring-up)");
   plan->add_option("--warm-start", po->warm_start,

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "overstep/core/error.hpp"
+#include "overstep/core/wrench.hpp"
 
 namespace overstep::planner {
 
@@ -81,6 +82,90 @@ core::Plan standingPlan(robots::WholeBodyModel& m, double duration, double rate)
       (f == 0 ? p.right_wrench : p.left_wrench).col(k) = w;
     }
   }
+  return p;
+}
+
+core::Plan excitationPlan(robots::WholeBodyModel& m, double duration, double amplitude,
+                          double rate) {
+  if (!(duration >= 3.0 && duration <= 3600.0))
+    throw InputError("excitation plan: duration " + std::to_string(duration) +
+                     " s outside [3, 3600]");
+  if (!(amplitude > 0.0 && amplitude <= 2.0))
+    throw InputError("excitation plan: amplitude " + std::to_string(amplitude) + " outside (0, 2]");
+  core::Plan p = standingPlan(m, duration, rate);
+  const auto& d = m.description();
+  struct Swing {
+    const char* joint;
+    double amp, freq, phase;  // rad, Hz, rad
+  };
+  // Incommensurate frequencies: the joints' velocities are not collinear (identifiability).
+  const Swing swings[] = {{"CHEST_JOINT0", 0.15, 0.31, 0.0}, {"CHEST_JOINT1", 0.06, 0.47, 1.0},
+                          {"HEAD_JOINT0", 0.20, 0.73, 0.5},  {"RARM_JOINT0", 0.40, 0.53, 0.0},
+                          {"LARM_JOINT0", 0.40, 0.61, 2.0},  {"RARM_JOINT3", 0.30, 0.89, 1.0},
+                          {"LARM_JOINT3", 0.30, 1.07, 0.3},  {"RARM_JOINT1", 0.10, 0.37, 0.7},
+                          {"LARM_JOINT1", 0.10, 0.43, 1.9}};
+  const double fade = 1.0;  // s
+  const double mg = m.totalMass() * d.gravity;
+  const int ls = m.frameIndex(d.foot("left")->sole_frame);
+  const Eigen::Isometry3d X_left = m.framePose(ls);
+  const int n = m.dofs();
+  for (int k = 0; k < p.samples(); ++k) {
+    const double t = p.t(k);
+    // Envelope e(t): sin^2 ramps at both ends (C1), with its derivatives.
+    double e = 1.0, de = 0.0, dde = 0.0;
+    const double tr = std::min(t, duration - t);
+    const double sgn = t < duration - t ? 1.0 : -1.0;
+    if (tr < fade) {
+      const double w = M_PI / (2.0 * fade);
+      e = std::sin(w * tr) * std::sin(w * tr);
+      de = sgn * w * std::sin(2.0 * w * tr);
+      dde = 2.0 * w * w * std::cos(2.0 * w * tr);
+    }
+    Eigen::VectorXd q = p.q.col(k), v = Eigen::VectorXd::Zero(n), a = v;
+    for (const auto& s : swings) {
+      const int ai = d.actuatedIndex(s.joint);
+      if (ai < 0) continue;
+      const int c = m.actuatedCoordinate(ai);
+      const double w = 2.0 * M_PI * s.freq, A = amplitude * s.amp;
+      const double f = A * std::sin(w * t + s.phase) - A * std::sin(s.phase);
+      const double df = A * w * std::cos(w * t + s.phase);
+      const double ddf = -A * w * w * std::sin(w * t + s.phase);
+      q(c) += e * f;
+      v(c) = de * f + e * df;
+      a(c) = dde * f + 2.0 * de * df + e * ddf;
+    }
+    const auto& aj = d.actuated;
+    for (int j = 0; j < m.actuatedCount(); ++j) {
+      const int c = m.actuatedCoordinate(j);
+      q(c) = std::clamp(q(c), aj[static_cast<std::size_t>(j)].safeLower(),
+                        aj[static_cast<std::size_t>(j)].safeUpper());
+    }
+    m.anchorBase(ls, X_left, q, v, a);
+    const Eigen::VectorXd tau = m.inverseDynamics();
+    const core::Vector6d W = m.contactWrenchFromBase(tau);  // about the world origin
+    p.q.col(k) = q;
+    p.v.col(k) = v;
+    p.a.col(k) = a;
+    p.tau.col(k) = tau.segment(6, m.actuatedCount());
+    p.com.col(k) = m.com();
+    const Eigen::Vector2d zmp = core::zmpFromWrench(W);
+    p.zmp_wholebody.col(k) = zmp;
+    p.zmp_tablecart.col(k) = core::tableCartZmp(m.com(), m.comAcceleration(), d.gravity);
+    // Split the normal force by the ZMP's lateral position; each foot's CoP at the ZMP's x.
+    const double yr = p.right_foot(1, k), yl = p.left_foot(1, k);
+    const double fz = W(5) > 0.0 ? W(5) : mg;
+    const double share_l = std::clamp((zmp.y() - yr) / (yl - yr), 0.0, 1.0);
+    for (int f = 0; f < 2; ++f) {
+      const double fzf = fz * (f == 0 ? 1.0 - share_l : share_l);
+      const Eigen::Vector3d o(f == 0 ? p.right_foot(0, k) : p.left_foot(0, k), f == 0 ? yr : yl,
+                              0.0);
+      core::Vector6d w = core::Vector6d::Zero();
+      w(5) = fzf;
+      w(1) = -(zmp.x() - o.x()) * fzf;  // My about the sole origin: CoP at the ZMP's x
+      (f == 0 ? p.right_wrench : p.left_wrench).col(k) = w;
+    }
+  }
+  p.summary_json = R"({"status": "excitation"})";
   return p;
 }
 

@@ -17,6 +17,7 @@
 #include "overstep/core/error.hpp"
 #include "overstep/core/obstacle.hpp"
 #include "overstep/msgs/convert.hpp"
+#include "overstep/sim/sensor_noise.hpp"
 #include "overstep/sim/simulator.hpp"
 #include "overstep/sim_status_t.hpp"
 
@@ -41,33 +42,6 @@ struct SimCliOptions {
   bool no_obstacle = false;
   core::ObstacleSpec obstacle;
   std::string obstacle_shape = "box";
-};
-
-/// Seeded sensor noise (standard deviations at noise = 1; realistic small values).
-struct Noise {
-  std::mt19937_64 rng;
-  double scale;
-  Noise(unsigned seed, double s) : rng(seed), scale(s) {}
-  double n(double sigma) {
-    if (scale <= 0.0) return 0.0;
-    std::normal_distribution<double> d(0.0, sigma * scale);
-    return d(rng);
-  }
-  void apply(core::RobotState& st) {
-    for (Eigen::Index j = 0; j < st.q.size(); ++j) {
-      st.q(j) += n(2e-5);   // rad, encoder
-      st.qd(j) += n(2e-3);  // rad/s
-      st.tau(j) += n(0.5);  // N m, current-based estimate
-    }
-    for (core::Vector6d* w : {&st.ft_right, &st.ft_left}) {
-      for (int i = 0; i < 3; ++i) (*w)(i) += n(0.5);   // N
-      for (int i = 3; i < 6; ++i) (*w)(i) += n(0.03);  // N m
-    }
-    for (int i = 0; i < 3; ++i) {
-      st.imu_angular_velocity(i) += n(1e-3);     // rad/s
-      st.imu_linear_acceleration(i) += n(0.02);  // m/s^2
-    }
-  }
 };
 
 class SimProcess {
@@ -264,7 +238,7 @@ class SimProcess {
 
   SimCliOptions o_;
   sim::Simulator sim_;
-  Noise noise_;
+  sim::SensorNoise noise_;
   lcm::LCM lcm_;
   int joints_;
   int steps_per_period_ = 5;

@@ -27,7 +27,8 @@ TEST(PlanCli, BadInputIsExitTwoWithOneLine) {
   for (const std::string args :
        {"plan --obstacle-height -0.2", "plan --obstacle-height tall", "plan --obstacle-width 0",
         "plan --obstacle-shape sphere", "plan --margin -1", "plan --robot /nonexistent.yaml",
-        "plan --threads -2"}) {
+        "plan --threads -2", "plan --excite 1", "plan --excite 5 --amplitude 3",
+        "plan --excite 5 --stand 5", "plan --resample"}) {
     const RunResult r = run(args + out);
     EXPECT_EQ(r.code, 2) << args << ": " << r.err;
     EXPECT_NE(lastLine(r.err).find("error"), std::string::npos) << args << ": " << r.err;

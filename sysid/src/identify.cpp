@@ -1,0 +1,406 @@
+#include "overstep/sysid/identify.hpp"
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "overstep/core/error.hpp"
+#include "overstep/core/plan.hpp"
+
+namespace overstep::sysid {
+namespace {
+
+struct Row {
+  int channel = 0;  // 0 position, 1 torque, 2 force
+  int joint = -1;   // actuated index (position, torque)
+  int record = 0;
+};
+
+const char* const kChannelName[3] = {"joint_position", "joint_torque", "force_sum"};
+const char* const kChannelUnit[3] = {"rad", "N m", "N"};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+/// Lag-1 autocorrelation of x over consecutive rows of the same signal.
+double lag1(const Eigen::VectorXd& x, const std::vector<Row>& rows, const std::vector<int>& idx) {
+  double num = 0.0, den = 0.0;
+  for (std::size_t i = 0; i < idx.size(); ++i) {
+    const double a = x(idx[i]);
+    den += a * a;
+    if (i + 1 < idx.size()) {
+      const Row& r0 = rows[static_cast<std::size_t>(idx[i])];
+      const Row& r1 = rows[static_cast<std::size_t>(idx[i + 1])];
+      if (r0.channel == r1.channel && r0.joint == r1.joint && r1.record == r0.record + 1)
+        num += a * x(idx[i + 1]);
+    }
+  }
+  return den > 0.0 ? num / den : 0.0;
+}
+
+struct Candidate {
+  std::string name;
+  std::vector<std::string> params;
+  Eigen::MatrixXd X;        // rows x params, physical units
+  std::vector<int> nonneg;  // parameters that must be >= 0 to be physical
+};
+
+}  // namespace
+
+Identification identify(const Dataset& data, const core::Plan& plan,
+                        const robots::WholeBodyModel& model_in, const IdentifyOptions& o) {
+  const int N = data.size();
+  if (N < 2 + static_cast<int>(2.0 / data.period))
+    throw InputError("identify: " + std::to_string(N) + " ticks (" +
+                     std::to_string(N * data.period) + " s) is too short: at least 2 s needed");
+  robots::WholeBodyModel model(model_in);
+  const auto& d = model.description();
+  const int nA = model.actuatedCount();
+  if (data.joints() != nA)
+    throw InputError("identify: the data have " + std::to_string(data.joints()) +
+                     " joints, the robot " + std::to_string(nA));
+  if (plan.q.rows() != model.dofs()) throw InputError("identify: the plan is for another robot");
+
+  // Moving joints: those whose command varies.
+  std::vector<int> moving;
+  for (int j = 0; j < nA; ++j) {
+    double s = 0.0, s2 = 0.0;
+    for (const auto& r : data.records) {
+      s += r.q_ref(j);
+      s2 += r.q_ref(j) * r.q_ref(j);
+    }
+    const double var = s2 / N - (s / N) * (s / N);
+    if (std::sqrt(std::max(var, 0.0)) > o.moving_threshold) moving.push_back(j);
+  }
+  // The servo over one control period: the error to the (extrapolated) target decays by rho.
+  const int steps = std::max(1, static_cast<int>(std::lround(data.period / o.servo_step)));
+  const double rho = std::pow(1.0 - o.servo_gain * o.servo_step, steps);
+
+  // Weights below each sensor (the sensors sit above the bushings).
+  double below = 0.0;
+  for (const char* side : {"right", "left"}) {
+    const auto* fd = d.foot(side);
+    below += model.massBelow(model.frameIndex(fd->force_sensor_frame), nullptr) * d.gravity;
+  }
+  const int payload_frame = model.hasFrame(o.payload_link) ? model.frameIndex(o.payload_link) : -1;
+
+  // ---- rows (channel-major, then joint, then time) and residuals
+  // Torques only where inverse dynamics needs no contact force: joints off the legs.
+  auto offLeg = [&](int j) {
+    const std::string& n = d.actuated[static_cast<std::size_t>(j)].name;
+    return n.rfind("RLEG", 0) != 0 && n.rfind("LLEG", 0) != 0;
+  };
+  std::vector<Row> rows;
+  for (int ch = 0; ch < 2; ++ch)
+    for (int j : moving)
+      if (ch == 0 || (o.use_torque && offLeg(j)))
+        for (int k = 1; k + 1 < N; ++k) rows.push_back({ch, j, k});
+  if (o.use_force)
+    for (int k = 1; k + 1 < N; ++k) rows.push_back({2, -1, k});
+  const int R = static_cast<int>(rows.size());
+  Eigen::VectorXd res(R);
+  // Per record: inverse-dynamics torques of the measured motion, payload torque regressors.
+  std::vector<Eigen::VectorXd> tau_id(static_cast<std::size_t>(N));
+  std::vector<Eigen::MatrixXd> pay(static_cast<std::size_t>(N));  // nA x 4
+  const Eigen::Vector3d gvec(0.0, 0.0, d.gravity);
+  const int imu_frame = model.frameIndex("imu");
+  const int base_frame = model.frameIndex(d.base_link);
+  const int soles[2] = {model.frameIndex(d.foot("right")->sole_frame),
+                        model.frameIndex(d.foot("left")->sole_frame)};
+  std::vector<double> com_acc_z(static_cast<std::size_t>(N), 0.0);
+  for (int k = 1; k + 1 < N; ++k) {
+    const Record& r = data.records[static_cast<std::size_t>(k)];
+    const int s =
+        std::clamp(static_cast<int>(std::lround(r.plan_t * plan.rate)), 0, plan.samples() - 1);
+    // The measured motion: joints from the encoders (accelerations by central differences), the
+    // elastic joints at the plan's, and the floating base from the IMU (orientation, gyro rate
+    // and its derivative) with a stance sole that does not slide.
+    Eigen::VectorXd q = plan.q.col(s), v = Eigen::VectorXd::Zero(model.dofs()), a = v;
+    const Record& rp = data.records[static_cast<std::size_t>(k - 1)];
+    const Record& rn = data.records[static_cast<std::size_t>(k + 1)];
+    for (int j = 0; j < nA; ++j) {
+      const int c = model.actuatedCoordinate(j);
+      q(c) = r.q(j);
+      v(c) = r.qd(j);
+      a(c) = (rn.qd(j) - rp.qd(j)) / (2.0 * data.period);
+    }
+    model.setPositions(q);
+    {
+      const Eigen::Matrix3d R_imu = model.framePose(imu_frame).linear();
+      Eigen::Isometry3d Xb = model.framePose(base_frame);
+      Xb.linear() = r.imu.toRotationMatrix() * R_imu.transpose() * Xb.linear();
+      Eigen::VectorXd v0 = v, a0 = a;
+      model.anchorBase(base_frame, Xb, q, v0, a0);
+    }
+    const Eigen::Matrix3d R_w_imu = r.imu.toRotationMatrix();
+    const Eigen::Vector3d w_now = R_w_imu * r.gyro;
+    const Eigen::Vector3d alpha =
+        (rn.imu.toRotationMatrix() * rn.gyro - rp.imu.toRotationMatrix() * rp.gyro) /
+        (2.0 * data.period);
+    const auto& ph = plan.phases[static_cast<std::size_t>(plan.phase(s))];
+    const int stance = ph.left_contact ? soles[1] : soles[0];
+    model.setState(q, v, Eigen::VectorXd::Zero(model.dofs()));
+    Eigen::Matrix<double, 6, 6> Jb;
+    Eigen::Matrix<double, 6, 1> rhs_v;
+    {
+      const Eigen::MatrixXd Ji = model.frameJacobian(imu_frame), Js = model.frameJacobian(stance);
+      Jb.topRows<3>() = Ji.block(0, 0, 3, 6);
+      Jb.bottomRows<3>() = Js.block(3, 0, 3, 6);
+      Eigen::VectorXd vnb = v;
+      vnb.head<6>().setZero();
+      rhs_v.head<3>() = w_now - Ji.topRows<3>() * vnb;
+      rhs_v.tail<3>() = -Js.bottomRows<3>() * vnb;
+    }
+    const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> lu(Jb);
+    v.head<6>() = lu.solve(rhs_v);
+    a.head<6>().setZero();
+    model.setState(q, v, a);
+    // Accelerations: the IMU's angular acceleration (gyro derivative) and a sole that does not
+    // slide. (The accelerometer instead gave 117 N RMS of vertical-force residual on clean data
+    // against 15 N: to be understood; docs/identification.md.)
+    Eigen::Matrix<double, 6, 1> rhs_a;
+    rhs_a.head<3>() = alpha - model.frameAcceleration(imu_frame).head<3>();
+    rhs_a.tail<3>() = -model.frameAcceleration(stance).tail<3>();
+    a.head<6>() = lu.solve(rhs_a);
+    model.setState(q, v, a);
+    tau_id[static_cast<std::size_t>(k)] = model.inverseDynamics().segment(6, nA);
+    com_acc_z[static_cast<std::size_t>(k)] = model.comAcceleration().z();
+    Eigen::MatrixXd P = Eigen::MatrixXd::Zero(nA, 4);
+    if (payload_frame >= 0) {
+      const Eigen::MatrixXd J = model.frameJacobian(payload_frame);  // [angular; linear]
+      const Eigen::Matrix3d Rl = model.framePose(payload_frame).linear();
+      for (int j = 0; j < nA; ++j) {
+        const int c = model.actuatedCoordinate(j);
+        P(j, 0) = J.block<3, 1>(3, c).dot(gvec);
+        for (int i = 0; i < 3; ++i) P(j, 1 + i) = J.block<3, 1>(0, c).dot((Rl.col(i)).cross(gvec));
+      }
+    }
+    pay[static_cast<std::size_t>(k)] = P;
+  }
+  for (int i = 0; i < R; ++i) {
+    const Row& w = rows[static_cast<std::size_t>(i)];
+    const Record& r = data.records[static_cast<std::size_t>(w.record)];
+    if (w.channel == 0) {
+      const int j = w.joint;
+      const double pred = r.q_ref(j) + r.qd_ref(j) * data.period - rho * (r.q_ref(j) - r.q0(j));
+      res(i) = r.q(j) - pred;
+    } else if (w.channel == 1) {
+      res(i) = r.tau(w.joint) - tau_id[static_cast<std::size_t>(w.record)](w.joint);
+    } else {
+      // The sensors carry the weight above them and its acceleration (vertical CoM).
+      res(i) =
+          r.ft[0](2) + r.ft[1](2) -
+          (model.totalMass() * (d.gravity + com_acc_z[static_cast<std::size_t>(w.record)]) - below);
+    }
+  }
+  if (!o.dump_residuals.empty()) {
+    std::string csv = "channel,joint,t,residual,measured\n";
+    for (int i = 0; i < R; ++i) {
+      const Row& w = rows[static_cast<std::size_t>(i)];
+      const Record& r = data.records[static_cast<std::size_t>(w.record)];
+      const double meas = w.channel == 0   ? r.q(w.joint)
+                          : w.channel == 1 ? r.tau(w.joint)
+                                           : r.ft[0](2) + r.ft[1](2);
+      csv += std::string(kChannelName[w.channel]) + "," +
+             (w.joint >= 0 ? d.actuated[static_cast<std::size_t>(w.joint)].name : "") + "," +
+             std::to_string(r.t) + "," + std::to_string(res(i)) + "," + std::to_string(meas) + "\n";
+    }
+    core::writeFileAtomic(o.dump_residuals, csv);
+  }
+  // Noise per channel: robust, from consecutive differences (a smooth effect cancels there).
+  double sigma[3] = {1.0, 1.0, 1.0};
+  for (int ch = 0; ch < 3; ++ch) {
+    std::vector<double> dd;
+    for (int i = 0; i + 1 < R; ++i) {
+      const Row& a = rows[static_cast<std::size_t>(i)];
+      const Row& b = rows[static_cast<std::size_t>(i + 1)];
+      if (a.channel == ch && b.channel == ch && a.joint == b.joint)
+        dd.push_back(std::abs(res(i + 1) - res(i)));
+    }
+    const double s = 1.4826 * median(dd) / std::sqrt(2.0);
+    sigma[ch] = s > 0.0 ? s : 1.0;
+  }
+  Eigen::VectorXd wgt(R);
+  for (int i = 0; i < R; ++i) wgt(i) = 1.0 / sigma[rows[static_cast<std::size_t>(i)].channel];
+
+  // ---- candidates
+  auto col = [&](auto f) {
+    Eigen::VectorXd c(R);
+    for (int i = 0; i < R; ++i) c(i) = f(rows[static_cast<std::size_t>(i)]);
+    return c;
+  };
+  auto recordOf = [&](const Row& w) -> const Record& {
+    return data.records[static_cast<std::size_t>(w.record)];
+  };
+  std::vector<Candidate> cands;
+  // Command delay and first-order lag: to first order both shift the references back in time by
+  // their value: q one period later falls short by (1 - rho) d qd (a documented confusable pair).
+  const Eigen::VectorXd shift = col([&](const Row& w) {
+    return w.channel == 0 ? -(1.0 - rho) * recordOf(w).qd_ref(w.joint) : 0.0;
+  });
+  cands.push_back({"command_delay", {"delay"}, shift, {0}});
+  cands.push_back({"command_lag", {"lag"}, shift, {0}});
+  // Joint friction per moving joint: the motor torque carries it, and the position loop lags by
+  // friction / stiffness.
+  for (int kind = 0; kind < 2; ++kind) {
+    Candidate c;
+    c.name = kind == 0 ? "joint_viscous_friction" : "joint_coulomb_friction";
+    c.X = Eigen::MatrixXd::Zero(R, static_cast<Eigen::Index>(moving.size()));
+    for (std::size_t m = 0; m < moving.size(); ++m) {
+      const int j = moving[m];
+      c.params.push_back((kind == 0 ? "viscous[" : "coulomb[") +
+                         d.actuated[static_cast<std::size_t>(j)].name + "]");
+      c.nonneg.push_back(static_cast<int>(m));
+      for (int i = 0; i < R; ++i) {
+        const Row& w = rows[static_cast<std::size_t>(i)];
+        if (w.joint != j) continue;
+        const double v = recordOf(w).qd(j);
+        const double f = kind == 0 ? v : std::tanh(v / 0.01);
+        c.X(i, static_cast<Eigen::Index>(m)) =
+            w.channel == 1 ? f : -(1.0 - rho) * f / o.servo_stiffness;
+      }
+    }
+    if (!moving.empty()) cands.push_back(std::move(c));
+  }
+  // A payload (mass m at offset c in the link frame): the sensors carry m g more, and the joints
+  // holding the link its gravity torque (linear in m and m c).
+  if (payload_frame >= 0) {
+    Candidate c{"payload",
+                {"mass", "mass*offset_x", "mass*offset_y", "mass*offset_z"},
+                Eigen::MatrixXd::Zero(R, 4),
+                {0}};
+    for (int i = 0; i < R; ++i) {
+      const Row& w = rows[static_cast<std::size_t>(i)];
+      if (w.channel == 2) c.X(i, 0) = d.gravity;
+      if (w.channel == 1) c.X.row(i) = pay[static_cast<std::size_t>(w.record)].row(w.joint);
+    }
+    cands.push_back(std::move(c));
+  }
+  // Force sensor bias (normal force) and scale, per foot.
+  for (int f = 0; f < 2; ++f) {
+    const std::string side = f == 0 ? "right" : "left";
+    cands.push_back({"ft_bias_" + side,
+                     {"fz_bias"},
+                     col([&](const Row& w) { return w.channel == 2 ? 1.0 : 0.0; }),
+                     {}});
+    cands.push_back({"ft_scale_" + side,
+                     {"scale_minus_1"},
+                     col([&](const Row& w) { return w.channel == 2 ? recordOf(w).ft[f](2) : 0.0; }),
+                     {}});
+  }
+
+  cands.erase(std::remove_if(cands.begin(), cands.end(),
+                             [](const Candidate& c) { return c.X.cwiseAbs().maxCoeff() == 0.0; }),
+              cands.end());
+  if (cands.empty()) throw InputError("identify: no candidate effect is visible in these data");
+  // ---- fit on the training part, score on the held-out part
+  const int split = static_cast<int>(o.train_fraction * N);
+  std::vector<int> train, test;
+  for (int i = 0; i < R; ++i)
+    (rows[static_cast<std::size_t>(i)].record < split ? train : test).push_back(i);
+  const Eigen::VectorXd rw = res.cwiseProduct(wgt);
+  auto rms = [](const Eigen::VectorXd& x, const std::vector<int>& idx) {
+    double s = 0.0;
+    for (int i : idx) s += x(i) * x(i);
+    return idx.empty() ? 0.0 : std::sqrt(s / static_cast<double>(idx.size()));
+  };
+  Identification out;
+  out.samples = N;
+  out.moving_joints = static_cast<int>(moving.size());
+  out.error_before = rms(rw, test);
+  out.whiteness = lag1(rw, rows, test);
+  std::vector<Eigen::VectorXd> fitted_resid;
+  for (const Candidate& c : cands) {
+    const int p = static_cast<int>(c.X.cols());
+    Eigen::MatrixXd A(static_cast<Eigen::Index>(train.size()), p);
+    Eigen::VectorXd b(static_cast<Eigen::Index>(train.size()));
+    for (std::size_t i = 0; i < train.size(); ++i) {
+      A.row(static_cast<Eigen::Index>(i)) = c.X.row(train[i]) * wgt(train[i]);
+      b(static_cast<Eigen::Index>(i)) = rw(train[i]);
+    }
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+    const Eigen::VectorXd theta = qr.solve(b);
+    const Eigen::VectorXd after = rw - (c.X * theta).cwiseProduct(wgt);
+    CandidateFit fit;
+    fit.name = c.name;
+    fit.parameter_names = c.params;
+    fit.parameters.assign(theta.data(), theta.data() + p);
+    const double rss0 = b.squaredNorm(), rss1 = (b - A * theta).squaredNorm();
+    const double ntr = static_cast<double>(train.size());
+    const double phi = std::clamp(lag1(after, rows, train), 0.0, 0.99);
+    const double neff = std::max(ntr * (1.0 - phi) / (1.0 + phi), p + 2.0);
+    fit.f_statistic = ((rss0 - rss1) / p) / std::max(rss1 / (neff - p), 1e-300);
+    fit.train_reduction = 1.0 - std::sqrt(rss1 / std::max(rss0, 1e-300));
+    const double before = rms(rw, test), aft = rms(after, test);
+    fit.reduction = before > 0.0 ? 1.0 - aft / before : 0.0;
+    // Covariance of theta, inflated for correlated residuals (N / N_eff).
+    const double s2 = rss1 / std::max(ntr - p, 1.0) * (ntr / neff);
+    const Eigen::MatrixXd AtA = A.transpose() * A;
+    const Eigen::MatrixXd cov = s2 * AtA.completeOrthogonalDecomposition().pseudoInverse();
+    fit.plausible = true;
+    for (int i = 0; i < p; ++i) {
+      const double half = 1.96 * std::sqrt(std::max(cov(i, i), 0.0));
+      fit.ci95.push_back(half);
+      const bool must_pos = std::find(c.nonneg.begin(), c.nonneg.end(), i) != c.nonneg.end();
+      if (must_pos && theta(i) < -half) fit.plausible = false;
+    }
+    if (p == 1 && std::abs(theta(0)) > 0.0 && fit.ci95[0] / 1.96 > 0.3 * std::abs(theta(0)))
+      fit.plausible = false;
+    if (c.name == "payload" && theta(0) <= 0.0) fit.plausible = false;
+    out.candidates.push_back(fit);
+    fitted_resid.push_back(after);
+  }
+  std::vector<std::size_t> order(out.candidates.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return out.candidates[a].reduction > out.candidates[b].reduction;
+  });
+  std::vector<CandidateFit> sorted;
+  for (std::size_t i : order) sorted.push_back(out.candidates[i]);
+  const std::size_t best_index = order.front();
+  out.candidates = sorted;
+
+  // ---- decision rule (docs/identification.md)
+  const CandidateFit& best = out.candidates.front();
+  const bool significant = best.f_statistic > 30.0 && best.reduction > 0.1;
+  Eigen::VectorXd final_resid = rw;
+  if (!significant) {
+    out.verdict = out.error_before < 2.0 ? "none" : "unexplained";
+  } else if (!best.plausible || best.reduction < 0.3) {
+    out.verdict = "unexplained";
+  } else {
+    out.effect = best.name;
+    final_resid = fitted_resid[best_index];
+    for (std::size_t i = 0; i < best.parameter_names.size(); ++i) {
+      out.parameters[best.parameter_names[i]] = best.parameters[i];
+      out.ci95[best.parameter_names[i]] = best.ci95[i];
+    }
+    for (std::size_t i = 1; i < out.candidates.size(); ++i) {
+      const CandidateFit& c = out.candidates[i];
+      if (c.plausible && c.reduction >= 0.8 * best.reduction) out.confusable.push_back(c.name);
+    }
+    out.verdict = out.confusable.empty() ? "identified" : "ambiguous";
+    if (!out.confusable.empty()) out.confusable.insert(out.confusable.begin(), best.name);
+  }
+  if (out.candidates.size() > 1) out.runner_up = out.candidates[1].name;
+  out.error_after = rms(final_resid, test);
+  for (int ch = 0; ch < 3; ++ch) {
+    std::vector<int> idx;
+    for (int i : test)
+      if (rows[static_cast<std::size_t>(i)].channel == ch) idx.push_back(i);
+    if (idx.empty()) continue;
+    ChannelError e;
+    e.unit = kChannelUnit[ch];
+    e.noise = sigma[ch];
+    e.rms_before = rms(rw, idx) * sigma[ch];
+    e.rms_after = rms(final_resid, idx) * sigma[ch];
+    out.channels[kChannelName[ch]] = e;
+  }
+  return out;
+}
+
+}  // namespace overstep::sysid

@@ -1,0 +1,163 @@
+// `overstep identify`'s core on data with undeclared effects: the simulator runs the excitation
+// plan with a truth the identification never sees (seeded noise on every sensor); the verdict must
+// name the effect (or a documented confusable pair containing it), the true value must lie in the
+// reported interval or within 15 %, and the held-out error must drop by at least 70 %. Clean runs
+// give "none".
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "overstep/sysid/identify.hpp"
+#include "sysid_runs.hpp"
+#include "test_util.hpp"
+
+namespace overstep {
+namespace {
+
+class Identify : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    model_ = new robots::WholeBodyModel(robots::WholeBodyModel::fromFile(test::hrp2Yaml()));
+    params_ = new stabilizer::Params(stabilizer::loadParams(test::hrp2Yaml()));
+    params_->mass = model_->totalMass();
+    plan_ = new core::Plan(planner::excitationPlan(*model_, 8.0));
+  }
+  static void TearDownTestSuite() {
+    delete plan_;
+    delete params_;
+    delete model_;
+  }
+  static sysid::Identification run(const sim::TruthEffects& truth, unsigned seed) {
+    const sysid::Dataset data = test::recordExcitation(*model_, *plan_, *params_, truth, seed);
+    EXPECT_GT(data.size(), 1400);  // the whole 8 s plan executed
+    sysid::IdentifyOptions o;
+    if (const char* dump = std::getenv("OVERSTEP_SYSID_DUMP")) o.dump_residuals = dump;
+    return sysid::identify(data, *plan_, *model_, o);
+  }
+  static std::string describe(const sysid::Identification& r) {
+    std::string s = r.verdict + " " + r.effect + " (before " + std::to_string(r.error_before) +
+                    ", after " + std::to_string(r.error_after) + "); channels:";
+    for (const auto& [n, c] : r.channels)
+      s += " " + n + " " + std::to_string(c.rms_before) + "/" + std::to_string(c.noise) + " " +
+           c.unit + ";";
+    s += " candidates:";
+    for (const auto& c : r.candidates)
+      s += " " + c.name + " " + std::to_string(c.reduction) + (c.plausible ? "" : "?") + " F " +
+           std::to_string(c.f_statistic) + ";";
+    return s;
+  }
+  /// The verdict names `effect`, alone or in a confusable pair.
+  static bool names(const sysid::Identification& r, const std::string& effect) {
+    if (r.verdict == "identified") return r.effect == effect;
+    if (r.verdict != "ambiguous") return false;
+    return std::find(r.confusable.begin(), r.confusable.end(), effect) != r.confusable.end();
+  }
+  /// The named candidate's fitted parameter (from the candidate list: with an ambiguous verdict
+  /// the true effect need not be the first) is the truth within its 95 % interval or 15 %.
+  static void expectValue(const sysid::Identification& r, const std::string& candidate,
+                          const std::string& param, double truth) {
+    const sysid::CandidateFit* fit = nullptr;
+    for (const auto& c : r.candidates)
+      if (c.name == candidate) fit = &c;
+    ASSERT_NE(fit, nullptr) << candidate;
+    std::size_t i = 0;
+    while (i < fit->parameter_names.size() && fit->parameter_names[i] != param) ++i;
+    ASSERT_LT(i, fit->parameter_names.size()) << param;
+    const double v = fit->parameters[i], ci = fit->ci95[i];
+    EXPECT_TRUE(std::abs(v - truth) <= ci || std::abs(v - truth) <= 0.15 * std::abs(truth))
+        << param << " = " << v << " +- " << ci << ", truth " << truth;
+  }
+  static robots::WholeBodyModel* model_;
+  static stabilizer::Params* params_;
+  static core::Plan* plan_;
+};
+robots::WholeBodyModel* Identify::model_ = nullptr;
+stabilizer::Params* Identify::params_ = nullptr;
+core::Plan* Identify::plan_ = nullptr;
+
+TEST_F(Identify, CleanRunsFindNothing) {
+  int none = 0;
+  for (unsigned seed : {1u, 2u, 3u, 4u}) {
+    const auto r = run(sim::noTruthEffects(*model_), seed);
+    none += r.verdict == "none";
+    EXPECT_EQ(r.verdict, "none") << "seed " << seed << ": " << describe(r);
+  }
+  EXPECT_EQ(none, 4);
+}
+
+TEST_F(Identify, CommandDelayAndLagAreTheDocumentedPair) {
+  for (double d : {0.01, 0.02}) {
+    for (bool lag : {false, true}) {
+      sim::TruthEffects t = sim::noTruthEffects(*model_);
+      (lag ? t.command_lag : t.command_delay) = d;
+      const auto r = run(t, 7);
+      const std::string effect = lag ? "command_lag" : "command_delay";
+      EXPECT_TRUE(names(r, effect)) << d << " s: " << describe(r);
+      if (!names(r, effect)) continue;
+      expectValue(r, effect, lag ? "lag" : "delay", d);
+      EXPECT_LT(r.error_after, 0.3 * r.error_before) << describe(r);
+    }
+  }
+}
+
+// An effect outside the library (backlash on the arms: the encoders read the motor side, the
+// load side lags by up to half the dead band) must not come back as a clean fit of another effect.
+TEST_F(Identify, AnEffectOutsideTheLibraryIsNotFittedAsAnother) {
+  sim::TruthEffects t = sim::noTruthEffects(*model_);
+  const auto& d = model_->description();
+  for (std::size_t j = 0; j < d.actuated.size(); ++j)
+    if (d.actuated[j].name.rfind("RARM", 0) == 0 || d.actuated[j].name.rfind("LARM", 0) == 0)
+      t.backlash(static_cast<Eigen::Index>(j)) = 0.02;
+  const auto r = run(t, 19);
+  std::printf("backlash: %s\n", describe(r).c_str());
+  EXPECT_TRUE(r.verdict == "unexplained" || r.verdict == "none") << describe(r);
+}
+
+// Needs the torque / force channels, off until their dynamics match (docs/identification.md).
+TEST_F(Identify, DISABLED_PayloadOnTheChestIsIdentified) {
+  for (double m : {2.0, 4.0}) {
+    sim::TruthEffects t = sim::noTruthEffects(*model_);
+    sim::Payload p;
+    p.link = "CHEST_LINK1";
+    p.mass = m;
+    p.offset = Eigen::Vector3d(0.05, 0.0, 0.10);
+    t.payloads.push_back(p);
+    const auto r = run(t, 11);
+    EXPECT_TRUE(names(r, "payload")) << m << " kg: " << describe(r);
+    if (!names(r, "payload")) continue;
+    expectValue(r, "payload", "mass", m);
+    EXPECT_LT(r.error_after, 0.3 * r.error_before) << describe(r);
+  }
+}
+
+// Needs the torque / force channels, off until their dynamics match (docs/identification.md).
+TEST_F(Identify, DISABLED_ArmFrictionIsIdentified) {
+  for (double fv : {3.0, 6.0}) {
+    sim::TruthEffects t = sim::noTruthEffects(*model_);
+    const auto& d = model_->description();
+    for (std::size_t j = 0; j < d.actuated.size(); ++j)
+      if (d.actuated[j].name.rfind("RARM", 0) == 0 || d.actuated[j].name.rfind("LARM", 0) == 0)
+        t.viscous(static_cast<Eigen::Index>(j)) = fv;
+    const auto r = run(t, 13);
+    EXPECT_TRUE(names(r, "joint_viscous_friction")) << fv << ": " << describe(r);
+    if (!names(r, "joint_viscous_friction")) continue;
+    expectValue(r, "joint_viscous_friction", "viscous[RARM_JOINT0]", fv);
+    EXPECT_LT(r.error_after, 0.3 * r.error_before) << describe(r);
+  }
+}
+
+// Needs the torque / force channels, off until their dynamics match (docs/identification.md).
+TEST_F(Identify, DISABLED_ForceSensorBiasIsNamed) {
+  for (double b : {10.0, 20.0}) {
+    sim::TruthEffects t = sim::noTruthEffects(*model_);
+    t.ft[1].bias(2) = b;  // left sensor, Fz
+    const auto r = run(t, 17);
+    // In double support the normal-force biases of the two sensors are confusable (and a scale
+    // error at nearly constant load): the verdict must include the left bias.
+    EXPECT_TRUE(names(r, "ft_bias_left")) << b << " N: " << describe(r);
+    expectValue(r, "ft_bias_left", "fz_bias", b);
+  }
+}
+
+}  // namespace
+}  // namespace overstep
