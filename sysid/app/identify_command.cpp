@@ -20,7 +20,7 @@ namespace {
 
 struct IdentifyCliOptions {
   std::string log, plan, robot;
-  bool json = false, torque = false, force = false;
+  bool json = false, no_torque = false, force = false;
   double train = 0.6;
 };
 
@@ -89,7 +89,7 @@ int runIdentify(const IdentifyCliOptions& o) {
     throw InputError(o.log + ": no executed tick of this plan in the log (another plan's run?)");
   sysid::IdentifyOptions io;
   io.train_fraction = o.train;
-  io.use_torque = o.torque;
+  io.use_torque = !o.no_torque;
   io.use_force = o.force;
   const sysid::Identification r = sysid::identify(data, plan, model, io);
   nlohmann::json j;
@@ -155,8 +155,7 @@ void registerIdentifyCommand(CLI::App& app, cli::Registry& registry) {
   sub->add_option("--robot", o->robot, "Robot YAML (the model to test)")->capture_default_str();
   sub->add_option("--train", o->train, "Fraction of the run used for fitting (rest: held out)")
       ->capture_default_str();
-  sub->add_flag("--torque", o->torque,
-                "Also use the motor-torque channel (not yet at the noise floor: docs)");
+  sub->add_flag("--no-torque", o->no_torque, "Leave the motor-torque channel out");
   sub->add_flag("--force", o->force,
                 "Also use the summed ankle-sensor force channel (not yet at the noise floor)");
   sub->add_flag("--json", o->json,

@@ -116,17 +116,17 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     const Record& r = data.records[static_cast<std::size_t>(k)];
     const int s =
         std::clamp(static_cast<int>(std::lround(r.plan_t * plan.rate)), 0, plan.samples() - 1);
-    // The measured motion: joints from the encoders (accelerations by central differences), the
+    // The measured motion: joints from the encoders (accelerations by backward differences over the
+    // period the motor torque is averaged on), the
     // elastic joints at the plan's, and the floating base from the IMU (orientation, gyro rate
     // and its derivative) with a stance sole that does not slide.
     Eigen::VectorXd q = plan.q.col(s), v = Eigen::VectorXd::Zero(model.dofs()), a = v;
     const Record& rp = data.records[static_cast<std::size_t>(k - 1)];
-    const Record& rn = data.records[static_cast<std::size_t>(k + 1)];
     for (int j = 0; j < nA; ++j) {
       const int c = model.actuatedCoordinate(j);
       q(c) = r.q(j);
       v(c) = r.qd(j);
-      a(c) = (rn.qd(j) - rp.qd(j)) / (2.0 * data.period);
+      a(c) = (r.qd(j) - rp.qd(j)) / data.period;  // the motor torque is a period's average
     }
     model.setPositions(q);
     {
@@ -139,8 +139,7 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     const Eigen::Matrix3d R_w_imu = r.imu.toRotationMatrix();
     const Eigen::Vector3d w_now = R_w_imu * r.gyro;
     const Eigen::Vector3d alpha =
-        (rn.imu.toRotationMatrix() * rn.gyro - rp.imu.toRotationMatrix() * rp.gyro) /
-        (2.0 * data.period);
+        (R_w_imu * r.gyro - rp.imu.toRotationMatrix() * rp.gyro) / data.period;
     const auto& ph = plan.phases[static_cast<std::size_t>(plan.phase(s))];
     const int stance = ph.left_contact ? soles[1] : soles[0];
     model.setState(q, v, Eigen::VectorXd::Zero(model.dofs()));

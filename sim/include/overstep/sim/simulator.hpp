@@ -28,6 +28,9 @@ struct SimOptions {
   /// the joint lag its reference by tau / stiffness, as a PD position loop does [est].
   double servo_stiffness = 3000.0;
   double ground_friction = 1.0;
+  /// Steps over which the reported motor torque is averaged (a current sensor's filter; 5 = one
+  /// 200 Hz control period at 1 ms). 1: the last step's servo impulse alone.
+  int torque_window = 5;
   /// DART contact constraint-force mixing: the compliance of the soles on the ground (rubber soles
   /// and the bushings' translational give, which the rigid model lacks). With DART's default
   /// (1e-5) double support is a rigid closed chain: a 1e-6 rad knee command offset moved each

@@ -26,11 +26,10 @@ struct IdentifyOptions {
   std::string payload_link = "CHEST_LINK1";  ///< where a payload candidate is attached
   double moving_threshold = 0.01;  ///< rad, std of a joint's command for it to count as moving
   std::string dump_residuals;      ///< CSV path: every residual row (channel, joint, t, value)
-  /// Channels used for the decision. The joint-position channel is at the noise floor on clean
-  /// simulated data; the motor-torque and summed-force channels are not yet (their inverse
-  /// dynamics of the measured motion leaves 9 N m and 15-21 N RMS at the excitation's frequencies
-  /// on clean data, docs/identification.md), so they are off by default.
-  bool use_torque = false, use_force = false;
+  /// Channels used for the decision besides the joint positions. The motor-torque channel is near
+  /// its noise floor on clean simulated data; the summed-force channel is not yet (15 N RMS at the
+  /// excitation's frequencies on clean data, docs/identification.md), so it is off by default.
+  bool use_torque = true, use_force = false;
 };
 
 struct CandidateFit {
