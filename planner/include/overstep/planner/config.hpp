@@ -53,7 +53,7 @@ struct PlannerConfig {
   /// reduced by this factor times its fastest endpoint's speed times half the sample interval (the
   /// farthest it can travel before the nearer sample), so that the clearance holds between
   /// samples too. 0: off; 1: the full half-interval travel.
-  double swept_clearance = 0.0;
+  double swept_clearance = 1.0;
   /// 1: the plan file's passive (elastic) coordinates are integrated between the collocation
   /// samples so that they obey their equations of motion under the planned joint trajectories
   /// (OverstepProblem::toPlan, docs/planner.md); 0: the splines as solved.
