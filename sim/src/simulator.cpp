@@ -94,6 +94,11 @@ struct Simulator::Impl {
   // base motion), as a current sensor's filter would not show.
   Eigen::MatrixXd motor_torque;  // joints x torque_window
   int torque_slot = 0, torque_filled = 0;
+  // Each foot's sensor wrench [F; M] (sensor frame) of the same steps, averaged the same way
+  // (the sensor's anti-aliasing filter): sampled once per control period, the per-step value
+  // aliased the servo's impulses into a bias (measured: +5..+12 N of summed normal force during
+  // the excitation plan, with the base height constant).
+  std::array<Eigen::Matrix<double, 6, Eigen::Dynamic>, 2> ft_hist;
 
   explicit Impl(const robots::WholeBodyModel& m) : model(m) {}
 };
@@ -307,6 +312,7 @@ Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& tr
   s.load_target = s.q_ref;
   s.friction.setZero(na);
   s.motor_torque.setZero(na, std::max(1, s.opt.torque_window));
+  for (auto& h : s.ft_hist) h.setZero(6, std::max(1, s.opt.torque_window));
   if (!(options.servo_stiffness > 0.0)) throw InputError("sim: servo stiffness: expected > 0");
 }
 
@@ -403,6 +409,8 @@ void Simulator::step() {
   for (std::size_t j = 0; j < s.actuated.size(); ++j)
     s.motor_torque(static_cast<Eigen::Index>(j), s.torque_slot) =
         s.actuated[j]->getConstraintImpulse(0) / dt + s.friction(static_cast<Eigen::Index>(j));
+  for (int f = 0; f < 2; ++f)
+    s.ft_hist[static_cast<std::size_t>(f)].col(s.torque_slot) = sensorWrench(f);
   s.torque_slot = (s.torque_slot + 1) % static_cast<int>(s.motor_torque.cols());
   s.torque_filled = std::min(s.torque_filled + 1, static_cast<int>(s.motor_torque.cols()));
 }
@@ -528,6 +536,32 @@ Eigen::Vector4d Simulator::elasticExternalTorque() const {
   return out;
 }
 
+core::Vector6d Simulator::sensorWrench(int f) const {
+  const Impl& s = *impl_;
+  const Eigen::Vector3d g(0.0, 0.0, -s.model.description().gravity);
+  // What the foot side transmits to the leg through the sensor, by Newton-Euler on the bodies
+  // below it: ground reaction + their weight - their momentum rate, about the sensor origin.
+  const Eigen::Vector3d o =
+      s.sensor[static_cast<std::size_t>(f)]->getWorldTransform().translation();
+  core::Vector6d w = core::shiftWrench(contacts_.foot_wrench[static_cast<std::size_t>(f)],
+                                       Eigen::Vector3d::Zero(), o);
+  for (const dd::BodyNode* b : s.below_sensor[static_cast<std::size_t>(f)]) {
+    const double m = b->getMass();
+    const Eigen::Vector3d c = b->getCOM();
+    const Eigen::Matrix3d R = b->getWorldTransform().linear();
+    const Eigen::Matrix3d Iw = R * b->getInertia().getMoment() * R.transpose();
+    const Eigen::Vector3d om = b->getAngularVelocity(), al = b->getAngularAcceleration();
+    const Eigen::Vector3d force = m * (g - b->getCOMLinearAcceleration());
+    const Eigen::Vector3d torque_c = -(Iw * al + om.cross(Iw * om));
+    w.head<3>() += torque_c + (c - o).cross(force);
+    w.tail<3>() += force;
+  }
+  const Eigen::Matrix3d Rs = s.sensor[static_cast<std::size_t>(f)]->getWorldTransform().linear();
+  core::Vector6d fm;  // [F; M] in the sensor frame (core::RobotState's order)
+  fm << Rs.transpose() * w.tail<3>(), Rs.transpose() * w.head<3>();
+  return fm;
+}
+
 core::RobotState Simulator::state() const {
   const Impl& s = *impl_;
   core::RobotState st;
@@ -545,32 +579,16 @@ core::RobotState Simulator::state() const {
                     ? s.motor_torque.row(j).head(s.torque_filled).sum() / s.torque_filled
                     : jt->getConstraintImpulse(0) / s.opt.dt + s.friction(j);
   }
-  const Eigen::Vector3d g(0.0, 0.0, -s.model.description().gravity);
   for (int f = 0; f < 2; ++f) {
-    // What the foot side transmits to the leg through the sensor, by Newton-Euler on the bodies
-    // below it: ground reaction + their weight - their momentum rate, about the sensor origin.
-    const Eigen::Vector3d o =
-        s.sensor[static_cast<std::size_t>(f)]->getWorldTransform().translation();
-    core::Vector6d w = core::shiftWrench(contacts_.foot_wrench[static_cast<std::size_t>(f)],
-                                         Eigen::Vector3d::Zero(), o);
-    for (const dd::BodyNode* b : s.below_sensor[static_cast<std::size_t>(f)]) {
-      const double m = b->getMass();
-      const Eigen::Vector3d c = b->getCOM();
-      const Eigen::Matrix3d R = b->getWorldTransform().linear();
-      const Eigen::Matrix3d Iw = R * b->getInertia().getMoment() * R.transpose();
-      const Eigen::Vector3d om = b->getAngularVelocity(), al = b->getAngularAcceleration();
-      const Eigen::Vector3d force = m * (g - b->getCOMLinearAcceleration());
-      const Eigen::Vector3d torque_c = -(Iw * al + om.cross(Iw * om));
-      w.head<3>() += torque_c + (c - o).cross(force);
-      w.tail<3>() += force;
-    }
-    const Eigen::Matrix3d Rs = s.sensor[static_cast<std::size_t>(f)]->getWorldTransform().linear();
-    core::Vector6d fm;  // [F; M] in the sensor frame (core::RobotState's order)
-    fm << Rs.transpose() * w.tail<3>(), Rs.transpose() * w.head<3>();
+    const auto& h = s.ft_hist[static_cast<std::size_t>(f)];
+    const core::Vector6d fm =
+        s.torque_filled > 0
+            ? core::Vector6d(h.leftCols(s.torque_filled).rowwise().sum() / s.torque_filled)
+            : sensorWrench(f);
     const auto& fx = s.truth.ft[static_cast<std::size_t>(f)];
-    fm = fx.scale * fm + fx.bias;
-    (f == 0 ? st.ft_right : st.ft_left) = fm;
+    (f == 0 ? st.ft_right : st.ft_left) = fx.scale * fm + fx.bias;
   }
+  const Eigen::Vector3d g(0.0, 0.0, -s.model.description().gravity);
   const Eigen::Isometry3d Xi = s.imu->getWorldTransform();
   st.imu_orientation = Eigen::Quaterniond(Xi.linear());
   st.imu_angular_velocity = Xi.linear().transpose() * s.imu->getAngularVelocity();

@@ -19,8 +19,8 @@ namespace overstep {
 namespace {
 
 struct IdentifyCliOptions {
-  std::string log, plan, robot;
-  bool json = false, no_torque = false, force = false;
+  std::string log, plan, robot, residuals;
+  bool json = false, no_torque = false, no_ground = false;
   double train = 0.6;
 };
 
@@ -90,7 +90,8 @@ int runIdentify(const IdentifyCliOptions& o) {
   sysid::IdentifyOptions io;
   io.train_fraction = o.train;
   io.use_torque = !o.no_torque;
-  io.use_force = o.force;
+  io.use_force = !o.no_ground;
+  io.dump_residuals = o.residuals;
   const sysid::Identification r = sysid::identify(data, plan, model, io);
   nlohmann::json j;
   j["verdict"] = r.verdict;
@@ -156,8 +157,10 @@ void registerIdentifyCommand(CLI::App& app, cli::Registry& registry) {
   sub->add_option("--train", o->train, "Fraction of the run used for fitting (rest: held out)")
       ->capture_default_str();
   sub->add_flag("--no-torque", o->no_torque, "Leave the motor-torque channel out");
-  sub->add_flag("--force", o->force,
-                "Also use the summed ankle-sensor force channel (not yet at the noise floor)");
+  sub->add_flag("--no-ground", o->no_ground,
+                "Leave the ground channels (ankle sensors' summed force and moment) out");
+  sub->add_option("--residuals", o->residuals,
+                  "Write every residual row (channel, joint, t, residual, measured) to this CSV");
   sub->add_flag("--json", o->json,
                 "Print {verdict, effect, parameters, ci95, runner_up, error_before, error_after, "
                 "channels}");

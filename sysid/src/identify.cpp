@@ -12,13 +12,19 @@ namespace overstep::sysid {
 namespace {
 
 struct Row {
-  int channel = 0;  // 0 position, 1 torque, 2 force
-  int joint = -1;   // actuated index (position, torque)
+  int channel = 0;  // 0 position, 1 torque, 2 force, 3 moment
+  int joint = -1;   // actuated index (position, torque); axis 0 = x, 1 = y (moment)
   int record = 0;
+  int span = 1;  // records the row averages (from `record` on)
 };
 
-const char* const kChannelName[3] = {"joint_position", "joint_torque", "force_sum"};
-const char* const kChannelUnit[3] = {"rad", "N m", "N"};
+constexpr int kChannels = 4;
+const char* const kChannelName[kChannels] = {"joint_position", "joint_torque", "force_sum",
+                                             "ground_moment"};
+const char* const kChannelUnit[kChannels] = {"rad", "N m", "N", "N m"};
+/// A channel whose held-out residual exceeds this many noise levels (RMS) shows an effect.
+constexpr double kResidualLevel = 1.5;
+constexpr double kGroundWindow = 0.05;  ///< s, averaging window of a ground-channel row
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -35,7 +41,7 @@ double lag1(const Eigen::VectorXd& x, const std::vector<Row>& rows, const std::v
     if (i + 1 < idx.size()) {
       const Row& r0 = rows[static_cast<std::size_t>(idx[i])];
       const Row& r1 = rows[static_cast<std::size_t>(idx[i + 1])];
-      if (r0.channel == r1.channel && r0.joint == r1.joint && r1.record == r0.record + 1)
+      if (r0.channel == r1.channel && r0.joint == r1.joint && r1.record == r0.record + r0.span)
         num += a * x(idx[i + 1]);
     }
   }
@@ -80,12 +86,8 @@ Identification identify(const Dataset& data, const core::Plan& plan,
   const int steps = std::max(1, static_cast<int>(std::lround(data.period / o.servo_step)));
   const double rho = std::pow(1.0 - o.servo_gain * o.servo_step, steps);
 
-  // Weights below each sensor (the sensors sit above the bushings).
-  double below = 0.0;
-  for (const char* side : {"right", "left"}) {
-    const auto* fd = d.foot(side);
-    below += model.massBelow(model.frameIndex(fd->force_sensor_frame), nullptr) * d.gravity;
-  }
+  const int sensor_frame[2] = {model.frameIndex(d.foot("right")->force_sensor_frame),
+                               model.frameIndex(d.foot("left")->force_sensor_frame)};
   const int payload_frame = model.hasFrame(o.payload_link) ? model.frameIndex(o.payload_link) : -1;
 
   // ---- rows (channel-major, then joint, then time) and residuals
@@ -99,8 +101,16 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     for (int j : moving)
       if (ch == 0 || (o.use_torque && offLeg(j)))
         for (int k = 1; k + 1 < N; ++k) rows.push_back({ch, j, k});
-  if (o.use_force)
-    for (int k = 1; k + 1 < N; ++k) rows.push_back({2, -1, k});
+  // Ground rows average kGroundWindow s of records: the prediction differentiates measured
+  // velocities (joint encoders, gyro) and is noisy per tick (measured on clean simulated data:
+  // 20-30 N m of ground-moment noise per tick against 3 N m of signal), while the effects these
+  // channels reveal (a payload, a sensor's bias or scale) are slow.
+  const int gw = std::max(1, static_cast<int>(std::lround(kGroundWindow / data.period)));
+  if (o.use_force) {
+    for (int k = 1; k + gw < N; k += gw) rows.push_back({2, -1, k, gw});
+    for (int axis = 0; axis < 2; ++axis)
+      for (int k = 1; k + gw < N; k += gw) rows.push_back({3, axis, k, gw});
+  }
   const int R = static_cast<int>(rows.size());
   Eigen::VectorXd res(R);
   // Per record: inverse-dynamics torques of the measured motion, payload torque regressors.
@@ -111,7 +121,18 @@ Identification identify(const Dataset& data, const core::Plan& plan,
   const int base_frame = model.frameIndex(d.base_link);
   const int soles[2] = {model.frameIndex(d.foot("right")->sole_frame),
                         model.frameIndex(d.foot("left")->sole_frame)};
-  std::vector<double> com_acc_z(static_cast<std::size_t>(N), 0.0);
+  // Per record, in the world frame about the point between the soles: the sensors' summed
+  // measured wrench, the model's prediction (the motion's contact wrench plus the weight of the
+  // bodies below the sensors), and the lever arms the candidates need.
+  struct Ground {
+    Eigen::Vector3d F_meas, M_meas, F_pred, M_pred;
+    Eigen::Vector3d sensor_p[2];  // sensor origins relative to the reference point
+    Eigen::Matrix3d sensor_R[2];
+    Eigen::Matrix<double, 6, 1> foot_meas[2];             // [F; M about the reference point], world
+    Eigen::Vector3d payload_p = Eigen::Vector3d::Zero();  // payload link origin, relative
+    Eigen::Matrix3d payload_R = Eigen::Matrix3d::Identity();
+  };
+  std::vector<Ground> ground(static_cast<std::size_t>(N));
   for (int k = 1; k + 1 < N; ++k) {
     const Record& r = data.records[static_cast<std::size_t>(k)];
     const int s =
@@ -166,8 +187,38 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     rhs_a.tail<3>() = -model.frameAcceleration(stance).tail<3>();
     a.head<6>() = lu.solve(rhs_a);
     model.setState(q, v, a);
-    tau_id[static_cast<std::size_t>(k)] = model.inverseDynamics().segment(6, nA);
-    com_acc_z[static_cast<std::size_t>(k)] = model.comAcceleration().z();
+    const Eigen::VectorXd tau_full = model.inverseDynamics();
+    tau_id[static_cast<std::size_t>(k)] = tau_full.segment(6, nA);
+    if (o.use_force) {
+      Ground& gr = ground[static_cast<std::size_t>(k)];
+      const Eigen::Vector3d P =
+          0.5 * (model.framePose(soles[0]).translation() + model.framePose(soles[1]).translation());
+      const core::Vector6d W = model.contactWrenchFromBase(tau_full);  // [M_O; F]
+      gr.F_pred = W.tail<3>();
+      gr.M_pred = W.head<3>() - P.cross(gr.F_pred);
+      gr.F_meas.setZero();
+      gr.M_meas.setZero();
+      for (int f = 0; f < 2; ++f) {
+        Eigen::Vector3d c;
+        const double mb = model.massBelow(sensor_frame[f], &c);
+        const Eigen::Vector3d wb(0.0, 0.0, -mb * d.gravity);
+        gr.F_pred += wb;
+        gr.M_pred += (c - P).cross(wb);
+        const Eigen::Isometry3d Xs = model.framePose(sensor_frame[f]);
+        gr.sensor_p[f] = Xs.translation() - P;
+        gr.sensor_R[f] = Xs.linear();
+        const Eigen::Vector3d Fw = Xs.linear() * r.ft[f].head<3>();
+        const Eigen::Vector3d Mw = Xs.linear() * r.ft[f].tail<3>() + gr.sensor_p[f].cross(Fw);
+        gr.foot_meas[f] << Fw, Mw;
+        gr.F_meas += Fw;
+        gr.M_meas += Mw;
+      }
+      if (payload_frame >= 0) {
+        const Eigen::Isometry3d Xl = model.framePose(payload_frame);
+        gr.payload_p = Xl.translation() - P;
+        gr.payload_R = Xl.linear();
+      }
+    }
     Eigen::MatrixXd P = Eigen::MatrixXd::Zero(nA, 4);
     if (payload_frame >= 0) {
       const Eigen::MatrixXd J = model.frameJacobian(payload_frame);  // [angular; linear]
@@ -180,6 +231,37 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     }
     pay[static_cast<std::size_t>(k)] = P;
   }
+  // Each ground row's window average (every quantity below enters linearly).
+  if (o.use_force)
+    for (int k = 1; k + gw < N; k += gw) {
+      Ground& a = ground[static_cast<std::size_t>(k)];
+      for (int i = 1; i < gw; ++i) {
+        const Ground& b = ground[static_cast<std::size_t>(k + i)];
+        a.F_meas += b.F_meas;
+        a.M_meas += b.M_meas;
+        a.F_pred += b.F_pred;
+        a.M_pred += b.M_pred;
+        a.payload_p += b.payload_p;
+        a.payload_R += b.payload_R;
+        for (int f = 0; f < 2; ++f) {
+          a.sensor_p[f] += b.sensor_p[f];
+          a.sensor_R[f] += b.sensor_R[f];
+          a.foot_meas[f] += b.foot_meas[f];
+        }
+      }
+      const double inv = 1.0 / gw;
+      a.F_meas *= inv;
+      a.M_meas *= inv;
+      a.F_pred *= inv;
+      a.M_pred *= inv;
+      a.payload_p *= inv;
+      a.payload_R *= inv;
+      for (int f = 0; f < 2; ++f) {
+        a.sensor_p[f] *= inv;
+        a.sensor_R[f] *= inv;
+        a.foot_meas[f] *= inv;
+      }
+    }
   for (int i = 0; i < R; ++i) {
     const Row& w = rows[static_cast<std::size_t>(i)];
     const Record& r = data.records[static_cast<std::size_t>(w.record)];
@@ -190,10 +272,10 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     } else if (w.channel == 1) {
       res(i) = r.tau(w.joint) - tau_id[static_cast<std::size_t>(w.record)](w.joint);
     } else {
-      // The sensors carry the weight above them and its acceleration (vertical CoM).
+      // The sensors carry what the motion needs from the ground plus the weight below them.
+      const Ground& gr = ground[static_cast<std::size_t>(w.record)];
       res(i) =
-          r.ft[0](2) + r.ft[1](2) -
-          (model.totalMass() * (d.gravity + com_acc_z[static_cast<std::size_t>(w.record)]) - below);
+          w.channel == 2 ? gr.F_meas.z() - gr.F_pred.z() : gr.M_meas(w.joint) - gr.M_pred(w.joint);
     }
   }
   if (!o.dump_residuals.empty()) {
@@ -201,18 +283,23 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     for (int i = 0; i < R; ++i) {
       const Row& w = rows[static_cast<std::size_t>(i)];
       const Record& r = data.records[static_cast<std::size_t>(w.record)];
+      const Ground& gr = ground[static_cast<std::size_t>(w.record)];
       const double meas = w.channel == 0   ? r.q(w.joint)
                           : w.channel == 1 ? r.tau(w.joint)
-                                           : r.ft[0](2) + r.ft[1](2);
+                          : w.channel == 2 ? gr.F_meas.z()
+                                           : gr.M_meas(w.joint);
       csv += std::string(kChannelName[w.channel]) + "," +
-             (w.joint >= 0 ? d.actuated[static_cast<std::size_t>(w.joint)].name : "") + "," +
-             std::to_string(r.t) + "," + std::to_string(res(i)) + "," + std::to_string(meas) + "\n";
+             (w.channel == 3 ? std::string(w.joint == 0 ? "x" : "y")
+              : w.joint >= 0 ? d.actuated[static_cast<std::size_t>(w.joint)].name
+                             : std::string()) +
+             "," + std::to_string(r.t) + "," + std::to_string(res(i)) + "," + std::to_string(meas) +
+             "\n";
     }
     core::writeFileAtomic(o.dump_residuals, csv);
   }
   // Noise per channel: robust, from consecutive differences (a smooth effect cancels there).
-  double sigma[3] = {1.0, 1.0, 1.0};
-  for (int ch = 0; ch < 3; ++ch) {
+  double sigma[kChannels] = {1.0, 1.0, 1.0, 1.0};
+  for (int ch = 0; ch < kChannels; ++ch) {
     std::vector<double> dd;
     for (int i = 0; i + 1 < R; ++i) {
       const Row& a = rows[static_cast<std::size_t>(i)];
@@ -272,24 +359,44 @@ Identification identify(const Dataset& data, const core::Plan& plan,
                 {"mass", "mass*offset_x", "mass*offset_y", "mass*offset_z"},
                 Eigen::MatrixXd::Zero(R, 4),
                 {0}};
+    const Eigen::Vector3d up(0.0, 0.0, d.gravity);
     for (int i = 0; i < R; ++i) {
       const Row& w = rows[static_cast<std::size_t>(i)];
       if (w.channel == 2) c.X(i, 0) = d.gravity;
       if (w.channel == 1) c.X.row(i) = pay[static_cast<std::size_t>(w.record)].row(w.joint);
+      if (w.channel == 3) {
+        // The ground carries the payload's weight where it is: m (p + R c) x g.
+        const Ground& gr = ground[static_cast<std::size_t>(w.record)];
+        c.X(i, 0) = gr.payload_p.cross(up)(w.joint);
+        for (int a = 0; a < 3; ++a) c.X(i, 1 + a) = gr.payload_R.col(a).cross(up)(w.joint);
+      }
     }
     cands.push_back(std::move(c));
   }
-  // Force sensor bias (normal force) and scale, per foot.
+  // Force sensor bias (normal force and the two tilting moments, sensor frame) and scale, per
+  // foot: what the sensor adds, carried to the world frame and the reference point.
   for (int f = 0; f < 2; ++f) {
     const std::string side = f == 0 ? "right" : "left";
-    cands.push_back({"ft_bias_" + side,
-                     {"fz_bias"},
-                     col([&](const Row& w) { return w.channel == 2 ? 1.0 : 0.0; }),
-                     {}});
-    cands.push_back({"ft_scale_" + side,
-                     {"scale_minus_1"},
-                     col([&](const Row& w) { return w.channel == 2 ? recordOf(w).ft[f](2) : 0.0; }),
-                     {}});
+    Candidate bias{
+        "ft_bias_" + side, {"fz_bias", "mx_bias", "my_bias"}, Eigen::MatrixXd::Zero(R, 3), {}};
+    Candidate scale{"ft_scale_" + side, {"scale_minus_1"}, Eigen::MatrixXd::Zero(R, 1), {}};
+    for (int i = 0; i < R; ++i) {
+      const Row& w = rows[static_cast<std::size_t>(i)];
+      if (w.channel < 2) continue;
+      const Ground& gr = ground[static_cast<std::size_t>(w.record)];
+      const Eigen::Matrix3d& Rs = gr.sensor_R[f];
+      if (w.channel == 2) {
+        bias.X(i, 0) = Rs(2, 2);
+        scale.X(i, 0) = gr.foot_meas[f](2);
+      } else {
+        bias.X(i, 0) = gr.sensor_p[f].cross(Rs.col(2))(w.joint);
+        bias.X(i, 1) = Rs(w.joint, 0);
+        bias.X(i, 2) = Rs(w.joint, 1);
+        scale.X(i, 0) = gr.foot_meas[f](3 + w.joint);
+      }
+    }
+    cands.push_back(std::move(bias));
+    cands.push_back(std::move(scale));
   }
 
   cands.erase(std::remove_if(cands.begin(), cands.end(),
@@ -307,12 +414,28 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     for (int i : idx) s += x(i) * x(i);
     return idx.empty() ? 0.0 : std::sqrt(s / static_cast<double>(idx.size()));
   };
+  // Channels that show an effect: held-out residual above kResidualLevel noise levels. Candidates
+  // are scored on those channels' held-out rows (all held-out rows when none shows one), so that
+  // an effect seen by one channel is not diluted by the others.
+  std::vector<int> eval;
+  for (int ch = 0; ch < kChannels; ++ch) {
+    std::vector<int> idx;
+    for (int i : test)
+      if (rows[static_cast<std::size_t>(i)].channel == ch) idx.push_back(i);
+    if (!idx.empty() && rms(rw, idx) > kResidualLevel)
+      eval.insert(eval.end(), idx.begin(), idx.end());
+  }
+  const bool residual_seen = !eval.empty();
+  if (!residual_seen) eval = test;
+  std::sort(eval.begin(), eval.end());
   Identification out;
   out.samples = N;
   out.moving_joints = static_cast<int>(moving.size());
-  out.error_before = rms(rw, test);
-  out.whiteness = lag1(rw, rows, test);
+  out.error_before = rms(rw, eval);
+  out.whiteness = lag1(rw, rows, eval);
   std::vector<Eigen::VectorXd> fitted_resid;
+  std::vector<Eigen::MatrixXd> design;        // per candidate: weighted training regressors
+  std::vector<Eigen::VectorXd> fitted_train;  // and its fitted effect on the training rows
   for (const Candidate& c : cands) {
     const int p = static_cast<int>(c.X.cols());
     Eigen::MatrixXd A(static_cast<Eigen::Index>(train.size()), p);
@@ -334,7 +457,7 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     const double neff = std::max(ntr * (1.0 - phi) / (1.0 + phi), p + 2.0);
     fit.f_statistic = ((rss0 - rss1) / p) / std::max(rss1 / (neff - p), 1e-300);
     fit.train_reduction = 1.0 - std::sqrt(rss1 / std::max(rss0, 1e-300));
-    const double before = rms(rw, test), aft = rms(after, test);
+    const double before = rms(rw, eval), aft = rms(after, eval);
     fit.reduction = before > 0.0 ? 1.0 - aft / before : 0.0;
     // Covariance of theta, inflated for correlated residuals (N / N_eff).
     const double s2 = rss1 / std::max(ntr - p, 1.0) * (ntr / neff);
@@ -349,14 +472,24 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     }
     if (p == 1 && std::abs(theta(0)) > 0.0 && fit.ci95[0] / 1.96 > 0.3 * std::abs(theta(0)))
       fit.plausible = false;
-    if (c.name == "payload" && theta(0) <= 0.0) fit.plausible = false;
+    // A payload sits on the link: mass positive, offset within half a metre.
+    if (c.name == "payload" && (theta(0) <= 0.0 || theta.tail(3).norm() > 0.5 * theta(0)))
+      fit.plausible = false;
+    for (int i : test) fit.held_out_rss += after(i) * after(i);
+    design.push_back(A);
+    fitted_train.push_back(A * theta);
     out.candidates.push_back(fit);
     fitted_resid.push_back(after);
   }
   std::vector<std::size_t> order(out.candidates.size());
   std::iota(order.begin(), order.end(), 0);
+  // Best: the smallest held-out residual over every channel (a channel below the residual level
+  // can still tell candidates apart, e.g. the ground moment a left or a right sensor's bias makes).
+  // Implausible fits (unphysical signs or sizes) rank after every plausible one.
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return out.candidates[a].reduction > out.candidates[b].reduction;
+    const CandidateFit &ca = out.candidates[a], &cb = out.candidates[b];
+    if (ca.plausible != cb.plausible) return ca.plausible;
+    return ca.held_out_rss < cb.held_out_rss;
   });
   std::vector<CandidateFit> sorted;
   for (std::size_t i : order) sorted.push_back(out.candidates[i]);
@@ -368,7 +501,7 @@ Identification identify(const Dataset& data, const core::Plan& plan,
   const bool significant = best.f_statistic > 30.0 && best.reduction > 0.1;
   Eigen::VectorXd final_resid = rw;
   if (!significant) {
-    out.verdict = out.error_before < 2.0 ? "none" : "unexplained";
+    out.verdict = residual_seen ? "unexplained" : "none";
   } else if (!best.plausible || best.reduction < 0.3) {
     out.verdict = "unexplained";
   } else {
@@ -378,16 +511,31 @@ Identification identify(const Dataset& data, const core::Plan& plan,
       out.parameters[best.parameter_names[i]] = best.parameters[i];
       out.ci95[best.parameter_names[i]] = best.ci95[i];
     }
+    // Confusable: explains most of what the best explains, and its held-out residual is not
+    // significantly larger (likelihood ratio with the effective sample size, > 10 ~ p < 0.002).
+    const double phi = std::clamp(lag1(final_resid, rows, test), 0.0, 0.99);
+    const double s2 = best.held_out_rss / std::max<double>(static_cast<double>(test.size()), 1.0);
+    // Or its regressors reproduce the winner's fitted effect on the training rows (>= 98 % of
+    // its norm): the experiment cannot tell them apart, whatever the residual says (e.g. a
+    // payload and a sensor's normal-force bias while both feet are on the ground).
+    const Eigen::VectorXd& sb = fitted_train[best_index];
     for (std::size_t i = 1; i < out.candidates.size(); ++i) {
-      const CandidateFit& c = out.candidates[i];
-      if (c.plausible && c.reduction >= 0.8 * best.reduction) out.confusable.push_back(c.name);
+      CandidateFit& c = out.candidates[i];
+      c.distinction =
+          (c.held_out_rss - best.held_out_rss) / std::max(s2, 1e-300) * (1.0 - phi) / (1.0 + phi);
+      const Eigen::MatrixXd& Ac = design[order[i]];
+      const Eigen::VectorXd proj = Ac * Ac.colPivHouseholderQr().solve(sb);
+      const double mimic = sb.norm() > 0.0 ? proj.norm() / sb.norm() : 0.0;
+      if (c.plausible && c.reduction >= 0.8 * best.reduction &&
+          (c.distinction < 10.0 || mimic >= 0.98))
+        out.confusable.push_back(c.name);
     }
     out.verdict = out.confusable.empty() ? "identified" : "ambiguous";
     if (!out.confusable.empty()) out.confusable.insert(out.confusable.begin(), best.name);
   }
   if (out.candidates.size() > 1) out.runner_up = out.candidates[1].name;
-  out.error_after = rms(final_resid, test);
-  for (int ch = 0; ch < 3; ++ch) {
+  out.error_after = rms(final_resid, eval);
+  for (int ch = 0; ch < kChannels; ++ch) {
     std::vector<int> idx;
     for (int i : test)
       if (rows[static_cast<std::size_t>(i)].channel == ch) idx.push_back(i);

@@ -44,7 +44,7 @@ class Identify : public ::testing::Test {
     s += " candidates:";
     for (const auto& c : r.candidates)
       s += " " + c.name + " " + std::to_string(c.reduction) + (c.plausible ? "" : "?") + " F " +
-           std::to_string(c.f_statistic) + ";";
+           std::to_string(c.f_statistic) + " D " + std::to_string(c.distinction) + ";";
     return s;
   }
   /// The verdict names `effect`, alone or in a confusable pair.
@@ -114,9 +114,9 @@ TEST_F(Identify, AnEffectOutsideTheLibraryIsNotFittedAsAnother) {
   EXPECT_TRUE(r.verdict == "unexplained" || r.verdict == "none") << describe(r);
 }
 
-// Needs the force channel (the payload's mass shows in the sensors' load), off until its
-// dynamics match (docs/identification.md).
-TEST_F(Identify, DISABLED_PayloadOnTheChestIsIdentified) {
+// The payload's weight shows in the ground channels (force and moment) and in the chest's
+// gravity torque.
+TEST_F(Identify, PayloadOnTheChestIsIdentified) {
   for (double m : {2.0, 4.0}) {
     sim::TruthEffects t = sim::noTruthEffects(*model_);
     sim::Payload p;
@@ -125,6 +125,7 @@ TEST_F(Identify, DISABLED_PayloadOnTheChestIsIdentified) {
     p.offset = Eigen::Vector3d(0.05, 0.0, 0.10);
     t.payloads.push_back(p);
     const auto r = run(t, 11);
+    std::printf("payload %g kg: %s\n", m, describe(r).c_str());
     EXPECT_TRUE(names(r, "payload")) << m << " kg: " << describe(r);
     if (!names(r, "payload")) continue;
     expectValue(r, "payload", "mass", m);
@@ -148,16 +149,30 @@ TEST_F(Identify, ArmFrictionIsIdentified) {
   }
 }
 
-// Needs the force channel, off until its dynamics match (docs/identification.md).
-TEST_F(Identify, DISABLED_ForceSensorBiasIsNamed) {
+TEST_F(Identify, ForceSensorBiasIsNamed) {
   for (double b : {10.0, 20.0}) {
     sim::TruthEffects t = sim::noTruthEffects(*model_);
     t.ft[1].bias(2) = b;  // left sensor, Fz
     const auto r = run(t, 17);
+    std::printf("left Fz bias %g N: %s\n", b, describe(r).c_str());
     // In double support the normal-force biases of the two sensors are confusable (and a scale
     // error at nearly constant load): the verdict must include the left bias.
     EXPECT_TRUE(names(r, "ft_bias_left")) << b << " N: " << describe(r);
     expectValue(r, "ft_bias_left", "fz_bias", b);
+    EXPECT_LT(r.error_after, 0.3 * r.error_before) << describe(r);
+  }
+}
+
+TEST_F(Identify, ForceSensorScaleIsNamed) {
+  for (double sc : {1.03, 1.06}) {
+    sim::TruthEffects t = sim::noTruthEffects(*model_);
+    t.ft[0].scale = sc;  // right sensor
+    const auto r = run(t, 23);
+    std::printf("right scale %g: %s\n", sc, describe(r).c_str());
+    EXPECT_TRUE(names(r, "ft_scale_right")) << sc << ": " << describe(r);
+    if (!names(r, "ft_scale_right")) continue;
+    expectValue(r, "ft_scale_right", "scale_minus_1", sc - 1.0);
+    EXPECT_LT(r.error_after, 0.3 * r.error_before) << describe(r);
   }
 }
 

@@ -28,8 +28,8 @@ struct SimOptions {
   /// the joint lag its reference by tau / stiffness, as a PD position loop does [est].
   double servo_stiffness = 3000.0;
   double ground_friction = 1.0;
-  /// Steps over which the reported motor torque is averaged (a current sensor's filter; 5 = one
-  /// 200 Hz control period at 1 ms). 1: the last step's servo impulse alone.
+  /// Steps over which the reported motor torques and force-sensor wrenches are averaged (the
+  /// sensors' filters; 5 = one 200 Hz control period at 1 ms). 1: the last step alone.
   int torque_window = 5;
   /// DART contact constraint-force mixing: the compliance of the soles on the ground (rubber soles
   /// and the bushings' translational give, which the rigid model lacks). With DART's default
@@ -109,6 +109,9 @@ class Simulator {
   Eigen::Vector4d elasticExternalTorque() const;
 
  private:
+  /// Foot f's sensor wrench [F; M] in the sensor frame after the last step (before the filter).
+  core::Vector6d sensorWrench(int f) const;
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
   ContactInfo contacts_;

@@ -1,12 +1,13 @@
 #pragma once
 /// \file
 /// Residual -> candidate effect -> parameters (docs/identification.md). The model predicts, for
-/// the commands that were sent, three measured channels: joint positions one control period
+/// the commands that were sent, four measured channels: joint positions one control period
 /// later (the servo model), motor torques of the moving joints (inverse dynamics of the measured
-/// motion) and the summed normal force of the ankle sensors (the plan's contact force minus the
-/// weight below the sensors). Each candidate effect is a block of regressor columns on the
-/// stacked, noise-normalised residual, linear in its parameters; each is fitted on the first part
-/// of the run and scored on the rest (held out).
+/// motion), and the ankle sensors' summed normal force and ground moment about the point between
+/// the soles (the measured motion's contact wrench plus the weight below the sensors). Each
+/// candidate effect is a block of regressor columns on the stacked, noise-normalised residual,
+/// linear in its parameters; each is fitted on the first part of the run and scored on the rest
+/// (held out).
 
 #include <map>
 #include <string>
@@ -26,10 +27,11 @@ struct IdentifyOptions {
   std::string payload_link = "CHEST_LINK1";  ///< where a payload candidate is attached
   double moving_threshold = 0.01;  ///< rad, std of a joint's command for it to count as moving
   std::string dump_residuals;      ///< CSV path: every residual row (channel, joint, t, value)
-  /// Channels used for the decision besides the joint positions. The motor-torque channel is near
-  /// its noise floor on clean simulated data; the summed-force channel is not yet (15 N RMS at the
-  /// excitation's frequencies on clean data, docs/identification.md), so it is off by default.
-  bool use_torque = true, use_force = false;
+  /// Channels besides the joint positions: motor torques of the moving joints off the legs, and
+  /// the ground channels (the ankle sensors' summed normal force and tilting moments against the
+  /// motion's contact wrench; at their noise floor on clean simulated data since the simulator's
+  /// sensors filter over the control period, docs/identification.md).
+  bool use_torque = true, use_force = true;
 };
 
 struct CandidateFit {
@@ -38,8 +40,12 @@ struct CandidateFit {
   std::vector<double> parameters, ci95;  ///< value and half-width of its 95 % interval
   double reduction = 0.0;  ///< held-out: 1 - RMS after / RMS before (normalised residual)
   double train_reduction = 0.0;
-  double f_statistic = 0.0;  ///< partial F on the training part with an effective sample size
-  bool plausible = true;     ///< signs and ranges physical, relative std < 30 %
+  double f_statistic = 0.0;   ///< partial F on the training part with an effective sample size
+  bool plausible = true;      ///< signs and ranges physical, relative std < 30 %
+  double held_out_rss = 0.0;  ///< sum of squares of the normalised held-out residual, all channels
+  /// Against the winner: held-out RSS excess in noise units, corrected for correlation (> 10:
+  /// distinguishable).
+  double distinction = 0.0;
 };
 
 struct ChannelError {
