@@ -32,10 +32,13 @@ using nlohmann::json;
 
 struct DemoOptions {
   std::string robot, config, truth, run_root = "runs", run_dir, cache_dir, lcm_url, plan;
+  /// The simulated robot's model when it differs from the controller's (--identify: the base
+  /// model plus the truth, while the planner and the runtime use the identified overlay).
+  std::string sim_robot;
   double height = 0.20, width = 0.11, gap = 0.03, margin = 0.0;
   std::string shape = "box";
   bool replan = false, allow_invalid = false, no_stabilizer = false, json = false;
-  bool no_report = false;
+  bool no_report = false, identify = false;
   double timeout = 120.0;        ///< s of wall time for the run (after planning)
   double plan_time_limit = 0.0;  ///< s, passed to overstep plan (0: its configuration's)
 };
@@ -115,16 +118,10 @@ std::string hex(std::size_t h) {
   return buf;
 }
 
-int runDemo(const DemoOptions& o) {
-  if (!(o.timeout > 0.0)) throw InputError("--timeout: expected > 0 s");
-  if (!(o.plan_time_limit >= 0.0)) throw InputError("--plan-time-limit: expected >= 0 s");
-  if (!fs::is_regular_file(o.robot)) throw InputError("robot file not found: " + o.robot);
-  if (!o.config.empty() && !fs::is_regular_file(o.config))
-    throw InputError("planner config not found: " + o.config);
-  if (!o.truth.empty() && !fs::is_regular_file(o.truth))
-    throw InputError("truth file not found: " + o.truth);
+/// One demo run into `run`: plan (or reuse), simulate, replay, record, verdict (also written to
+/// run/verdict.json).
+json demoRun(const DemoOptions& o, const fs::path& run) {
   const std::string exe = selfExe();
-  const fs::path run = o.run_dir.empty() ? fs::path(o.run_root) / utcStamp() : fs::path(o.run_dir);
   const fs::path cache =
       o.cache_dir.empty() ? fs::path(o.run_root) / "cache" : fs::path(o.cache_dir);
   std::error_code ec;
@@ -214,8 +211,9 @@ int runDemo(const DemoOptions& o) {
   if (o.no_stabilizer) replay_argv.push_back("--no-stabilizer");
   const pid_t replay =
       spawn(replay_argv, (run / "replay.json").string(), (run / "replay.log").string());
-  std::vector<std::string> sim_argv = {exe,     "sim",    "--lockstep", "--robot",
-                                       o.robot, "--json", "--lcm-url",  url};
+  std::vector<std::string> sim_argv = {
+      exe,      "sim",       "--lockstep", "--robot", o.sim_robot.empty() ? o.robot : o.sim_robot,
+      "--json", "--lcm-url", url};
   // The simulated bar is the envelope itself: --margin is extra clearance for the planner only
   // (the last two obstacle arguments).
   sim_argv.insert(sim_argv.end(), obstacle_args.begin(), obstacle_args.end() - 2);
@@ -284,28 +282,136 @@ int runDemo(const DemoOptions& o) {
     }
   }
   core::writeFileAtomic((run / "verdict.json").string(), v.dump(2) + "\n");
+  return v;
+}
+
+void printVerdict(const json& v) {
+  const bool fell = v["fell"].get<bool>(), contact = v["obstacle_contact"].get<bool>();
+  const bool finished = v["finished"].get<bool>(), beyond = v["feet_beyond_obstacle"].get<bool>();
+  const bool still = v["static_at_end"].get<bool>();
+  std::printf("%s: %s\n", v["cleared"].get<bool>() ? "CLEARED" : "NOT CLEARED",
+              fell      ? "the robot fell"
+              : contact ? "the robot touched the obstacle"
+              : !finished
+                  ? ("the runtime stopped: " + v["runtime_fault"].get<std::string>()).c_str()
+              : !beyond ? "a foot did not get past the obstacle"
+              : !still  ? "the robot was still moving at the end"
+                        : "both feet past the obstacle, standing still");
+  std::printf("executed %.2f s (plan %.2f s%s; the seed: 4.32 s plan, 4.33 s simulated)\n",
+              v["duration"].get<double>(), v["plan_duration"].get<double>(),
+              v["plan_valid"].get<bool>() ? "" : ", INVALID plan");
+  std::printf(
+      "tracking RMS %.4f rad, stabilizer effort %.4f rad, largest CoP excursion R %.3f m L "
+      "%.3f m, torso deviation %.3f rad\n",
+      v["tracking_rms"].get<double>(), v["stabilizer_effort"].get<double>(),
+      v["cop_max"].value("right", 0.0), v["cop_max"].value("left", 0.0),
+      v["torso_deviation_max"].get<double>());
+  std::printf("run folder: %s (plan.json, bus.lcmlog, replay.json, sim.json, verdict.json)\n",
+              v["run_dir"].get<std::string>().c_str());
+  if (v.contains("report") && v["report"].is_string())
+    std::printf("figures: %s\n", v["report"].get<std::string>().c_str());
+}
+
+/// `--identify`: run with the model as it is; an identification experiment on the same simulated
+/// robot (overstep plan --excite: standing, chest, head and arms swinging); identify the effect
+/// from its log (a model overlay in the run folder); re-plan with the identified model and run
+/// again; before and after.
+json identifyLoop(const DemoOptions& o, const fs::path& run) {
+  const std::string exe = selfExe();
+  std::fprintf(stderr, "demo --identify: 1/4 run with the model as it is\n");
+  const json before = demoRun(o, run / "before");
+  std::fprintf(stderr, "demo --identify: 2/4 identification experiment (8 s, standing)\n");
+  const fs::path ex = run / "experiment";
+  std::error_code ec;
+  fs::create_directories(ex, ec);
+  if (waitFor(spawn({exe, "plan", "--excite", "8", "--robot", o.robot, "--out",
+                     (ex / "excite.json").string()},
+                    (ex / "plan.log").string(), (ex / "plan.err").string()),
+              -1) != kExitOk)
+    throw std::runtime_error("the excitation plan failed (see " + (ex / "plan.err").string() + ")");
+  DemoOptions oe = o;
+  oe.plan = (ex / "excite.json").string();
+  oe.allow_invalid = true;  // a quasi-static split of the wrenches: overstep check rejects it
+  oe.no_report = true;
+  const json experiment = demoRun(oe, ex);
+  const fs::path overlay = run / "identified.yaml";
+  std::fprintf(stderr, "demo --identify: 3/4 identify from %s\n", (ex / "bus.lcmlog").c_str());
+  const int code = waitFor(
+      spawn({exe, "identify", (ex / "bus.lcmlog").string(), "--plan", (ex / "plan.json").string(),
+             "--robot", o.robot, "--out", overlay.string(), "--json"},
+            (run / "identify.json").string(), (run / "identify.log").string()),
+      -1);
+  const json id = readJson(run / "identify.json");
+  if (code != kExitOk || !id.is_object())
+    throw std::runtime_error("identify failed (exit " + std::to_string(code) + ", see " +
+                             (run / "identify.log").string() + ")");
+  json out;
+  out["before"] = before;
+  out["experiment"] = experiment;
+  out["identify"] = id;
+  out["run_dir"] = run.string();
+  if (!fs::is_regular_file(overlay)) {
+    std::fprintf(stderr, "demo --identify: verdict %s, nothing to add to the model\n",
+                 id.value("verdict", "?").c_str());
+    out["after"] = nullptr;
+    return out;
+  }
+  std::fprintf(stderr, "demo --identify: 4/4 re-plan and run with %s (%s)\n", overlay.c_str(),
+               id.value("effect", "?").c_str());
+  DemoOptions o2 = o;
+  o2.robot = overlay.string();
+  o2.sim_robot = o.robot;  // the simulated robot stays what it is (base model + truth)
+  const json after = demoRun(o2, run / "after");
+  out["after"] = after;
+  for (const char* k : {"tracking_rms", "stabilizer_effort"})
+    out["change"][k] = {before[k], after[k]};
+  return out;
+}
+
+int runDemo(const DemoOptions& o) {
+  if (!(o.timeout > 0.0)) throw InputError("--timeout: expected > 0 s");
+  if (!(o.plan_time_limit >= 0.0)) throw InputError("--plan-time-limit: expected >= 0 s");
+  if (!fs::is_regular_file(o.robot)) throw InputError("robot file not found: " + o.robot);
+  if (!o.config.empty() && !fs::is_regular_file(o.config))
+    throw InputError("planner config not found: " + o.config);
+  if (!o.truth.empty() && !fs::is_regular_file(o.truth))
+    throw InputError("truth file not found: " + o.truth);
+  if (o.identify && !o.plan.empty())
+    throw InputError(
+        "--identify re-plans with the identified model: give the obstacle, not --plan");
+  const fs::path run = o.run_dir.empty() ? fs::path(o.run_root) / utcStamp() : fs::path(o.run_dir);
+  std::error_code ec;
+  fs::create_directories(run, ec);
+  if (ec) throw InputError("cannot create run folder " + run.string() + ": " + ec.message());
+  if (o.identify) {
+    const json out = identifyLoop(o, run);
+    core::writeFileAtomic((run / "identify_loop.json").string(), out.dump(2) + "\n");
+    if (o.json) {
+      std::cout << out.dump(2) << "\n";
+    } else {
+      const json& id = out["identify"];
+      std::printf("identified: %s%s%s\n", id.value("verdict", "?").c_str(),
+                  id.value("effect", "").empty() ? "" : " -> ", id.value("effect", "").c_str());
+      if (out["after"].is_object()) {
+        std::printf("%-20s %12s %12s\n", "", "before", "after");
+        for (const char* k : {"tracking_rms", "stabilizer_effort"})
+          std::printf("%-20s %12.5f %12.5f rad\n", k, out["before"][k].get<double>(),
+                      out["after"][k].get<double>());
+        std::printf("%-20s %12s %12s\n", "cleared",
+                    out["before"]["cleared"].get<bool>() ? "yes" : "no",
+                    out["after"]["cleared"].get<bool>() ? "yes" : "no");
+      }
+      std::printf("run folder: %s (before/, experiment/, identify.json, identified.yaml, after/)\n",
+                  run.c_str());
+    }
+    const json& last = out["after"].is_object() ? out["after"] : out["before"];
+    return last["cleared"].get<bool>() ? kExitOk : kExitHeld;
+  }
+  const json v = demoRun(o, run);
   if (o.json) {
     std::cout << v.dump(2) << "\n";
   } else {
-    std::printf("%s: %s\n", v["cleared"].get<bool>() ? "CLEARED" : "NOT CLEARED",
-                fell        ? "the robot fell"
-                : contact   ? "the robot touched the obstacle"
-                : !finished ? ("the runtime stopped: " + r.value("fault", std::string("?"))).c_str()
-                : !beyond   ? "a foot did not get past the obstacle"
-                : !still    ? "the robot was still moving at the end"
-                            : "both feet past the obstacle, standing still");
-    std::printf("executed %.2f s (plan %.2f s%s; the seed: 4.32 s plan, 4.33 s simulated)\n",
-                v["duration"].get<double>(), plan.duration(), plan_valid ? "" : ", INVALID plan");
-    std::printf(
-        "tracking RMS %.4f rad, stabilizer effort %.4f rad, largest CoP excursion R %.3f m L "
-        "%.3f m, torso deviation %.3f rad\n",
-        v["tracking_rms"].get<double>(), v["stabilizer_effort"].get<double>(),
-        r["cop_max"].value("right", 0.0), r["cop_max"].value("left", 0.0),
-        v["torso_deviation_max"].get<double>());
-    std::printf("run folder: %s (plan.json, bus.lcmlog, replay.json, sim.json, verdict.json)\n",
-                run.c_str());
-    if (v.contains("report") && v["report"].is_string())
-      std::printf("figures: %s\n", v["report"].get<std::string>().c_str());
+    printVerdict(v);
   }
   return v["cleared"].get<bool>() ? kExitOk : kExitHeld;
 }
@@ -342,12 +448,16 @@ void registerDemoCommand(CLI::App& app, cli::Registry& registry) {
   sub->add_flag("--allow-invalid-plan", o->allow_invalid,
                 "Replay the planner's best attempt when no plan passes the check");
   sub->add_flag("--no-stabilizer", o->no_stabilizer, "Open-loop replay");
+  sub->add_flag("--identify", o->identify,
+                "Close the loop: run, identify the effect (overstep identify), re-plan with the "
+                "identified model, run again; before and after");
   sub->add_flag("--json", o->json, "Print the verdict as JSON");
   sub->footer(
       "Examples:\n"
       "  overstep demo                                  # the 20 cm x 11 cm overstep\n"
       "  overstep demo --obstacle-height 0.05 --json    # a small bar, verdict as JSON\n"
       "  overstep demo --truth truth.yaml               # on a robot with undeclared effects\n"
+      "  overstep demo --truth truth.yaml --identify    # ... identify it, re-plan, run again\n"
       "Writes RUN_DIR/{plan.json, bus.lcmlog, replay.json, sim.json, verdict.json}.\n"
       "Exit: 0 cleared, 2 bad input, 3 no valid plan, 4 the robot did not clear the obstacle.");
   registry.add(sub, [o] { return runDemo(*o); });

@@ -65,11 +65,129 @@ std::string RobotDescription::hashHex() const {
   return buf;
 }
 
+namespace {
+
+RobotDescription loadRobotDescriptionAt(const std::string& yaml_path, int depth);
+
+/// A list of joint names (or one name) -> actuated indices.
+std::vector<int> jointList(const YAML::Node& n, const std::string& key, const Reader& r,
+                           const RobotDescription& d) {
+  std::vector<std::string> names;
+  if (n.IsScalar()) {
+    names.push_back(n.as<std::string>());
+  } else if (n.IsSequence()) {
+    for (const auto& x : n) names.push_back(r.as<std::string>(x, key));
+  } else {
+    r.fail(key, "expected a joint name or a list of them");
+  }
+  std::vector<int> out;
+  for (const auto& nm : names) {
+    const int j = d.actuatedIndex(nm);
+    if (j < 0) r.fail(key, "unknown joint '" + nm + "'");
+    out.push_back(j);
+  }
+  return out;
+}
+
+RobotDescription loadOverlay(const std::string& yaml_path, const std::string& text,
+                             const YAML::Node& root, int depth) {
+  const Reader r(yaml_path);
+  r.onlyKeys(root, "",
+             {"base", "identified", "ankle", "friction", "payload", "command", "ft_sensor"});
+  std::filesystem::path bp(r.as<std::string>(root["base"], "base"));
+  if (bp.is_relative()) bp = std::filesystem::path(yaml_path).parent_path() / bp;
+  if (depth > 4) r.fail("base", "overlays nested more than 4 deep");
+  RobotDescription d = loadRobotDescriptionAt(bp.lexically_normal().string(), depth + 1);
+  d.base_yaml = d.yaml_path;
+  d.yaml_path = yaml_path;
+  ModelEffects& e = d.effects;
+  if (const YAML::Node a = root["ankle"]) {
+    if (!a.IsMap())
+      r.fail("ankle", "expected a map from elastic joint name to {stiffness, damping}");
+    for (const auto& kv : a) {
+      const std::string name = kv.first.as<std::string>();
+      const int i = d.elasticIndex(name);
+      const std::string key = "ankle." + name;
+      if (i < 0) r.fail(key, "unknown elastic joint");
+      r.onlyKeys(kv.second, key, {"stiffness", "damping"});
+      auto& ej = d.elastic[static_cast<std::size_t>(i)];
+      if (kv.second["stiffness"])
+        ej.stiffness = r.positiveValue(kv.second["stiffness"], key + ".stiffness");
+      if (kv.second["damping"])
+        ej.damping = r.valueAtLeast(kv.second["damping"], key + ".damping", 0.0);
+    }
+  }
+  if (const YAML::Node f = root["friction"]) {
+    if (!f.IsSequence()) r.fail("friction", "expected a list of {joints, viscous, coulomb}");
+    const auto n = static_cast<Eigen::Index>(d.actuated.size());
+    e.viscous.setZero(n);
+    e.coulomb.setZero(n);
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      const std::string key = "friction[" + std::to_string(k) + "]";
+      r.onlyKeys(f[k], key, {"joints", "viscous", "coulomb"});
+      if (!f[k]["joints"]) r.fail(key, "missing 'joints'");
+      for (int j : jointList(f[k]["joints"], key + ".joints", r, d)) {
+        if (f[k]["viscous"]) e.viscous(j) = r.valueAtLeast(f[k]["viscous"], key + ".viscous", 0.0);
+        if (f[k]["coulomb"]) e.coulomb(j) = r.valueAtLeast(f[k]["coulomb"], key + ".coulomb", 0.0);
+      }
+    }
+  }
+  if (const YAML::Node p = root["payload"]) {
+    if (!p.IsSequence()) r.fail("payload", "expected a list of {link, mass, offset}");
+    for (std::size_t k = 0; k < p.size(); ++k) {
+      const std::string key = "payload[" + std::to_string(k) + "]";
+      r.onlyKeys(p[k], key, {"link", "mass", "offset"});
+      if (!p[k]["link"] || !p[k]["mass"]) r.fail(key, "needs 'link' and 'mass'");
+      PayloadDescription pl;
+      pl.link = r.as<std::string>(p[k]["link"], key + ".link");
+      pl.mass = r.positiveValue(p[k]["mass"], key + ".mass");
+      if (const YAML::Node o = p[k]["offset"]) {
+        pl.offset = r.vector<3>(o, key + ".offset");
+        if (pl.offset.cwiseAbs().maxCoeff() > 1.0) r.fail(key + ".offset", "expected |x| <= 1 m");
+      }
+      e.payloads.push_back(pl);  // the link is checked where the model is built (robots/)
+    }
+  }
+  if (const YAML::Node c = root["command"]) {
+    r.onlyKeys(c, "command", {"delay", "lag"});
+    if (c["delay"]) e.command_delay = r.valueAtLeast(c["delay"], "command.delay", 0.0);
+    if (c["lag"]) e.command_lag = r.valueAtLeast(c["lag"], "command.lag", 0.0);
+    if (e.command_delay > 1.0 || e.command_lag > 1.0) r.fail("command", "expected <= 1 s");
+  }
+  if (const YAML::Node f = root["ft_sensor"]) {
+    r.onlyKeys(f, "ft_sensor", {"right", "left"});
+    for (int i = 0; i < 2; ++i) {
+      const char* side = i == 0 ? "right" : "left";
+      const YAML::Node s = f[side];
+      if (!s) continue;
+      const std::string key = std::string("ft_sensor.") + side;
+      r.onlyKeys(s, key, {"bias", "scale"});
+      if (s["bias"]) e.ft_bias[static_cast<std::size_t>(i)] = r.vector<6>(s["bias"], key + ".bias");
+      if (s["scale"]) {
+        e.ft_scale[static_cast<std::size_t>(i)] = r.positiveValue(s["scale"], key + ".scale");
+        if (std::abs(e.ft_scale[static_cast<std::size_t>(i)] - 1.0) > 0.5)
+          r.fail(key + ".scale", "expected 0.5 .. 1.5");
+      }
+    }
+  }
+  d.content_hash = fnv1a64(text, d.content_hash);
+  return d;
+}
+
+}  // namespace
+
 RobotDescription loadRobotDescription(const std::string& yaml_path) {
+  return loadRobotDescriptionAt(yaml_path, 0);
+}
+
+namespace {
+
+RobotDescription loadRobotDescriptionAt(const std::string& yaml_path, int depth) {
   const std::string text = readFile(yaml_path);  // parsed and hashed
   YAML::Node root = YamlReader::parse(text, yaml_path);
   Reader r(yaml_path);
   if (!root.IsMap()) throw InputError(yaml_path + ": expected a YAML map at the top level");
+  if (root["base"]) return loadOverlay(yaml_path, text, root, depth);
 
   RobotDescription d;
   d.yaml_path = yaml_path;
@@ -202,5 +320,7 @@ RobotDescription loadRobotDescription(const std::string& yaml_path) {
   d.content_hash = fnv1a64(readFile(d.urdf_path), fnv1a64(text));
   return d;
 }
+
+}  // namespace
 
 }  // namespace overstep::core

@@ -199,8 +199,30 @@ WholeBodyModel::WholeBodyModel(core::RobotDescription description)
     m.stiffness(c) = e.stiffness;
     m.damping(c) = e.damping;
   }
+  // A model overlay's payloads (docs/model-overlay.md).
+  for (const auto& p : m.desc.effects.payloads) {
+    try {
+      attachPointMass(*m.skel, p.link, p.mass, p.offset);
+    } catch (const InputError& e) {
+      throw InputError(m.desc.yaml_path + ": " + e.what());
+    }
+  }
   m.mass = m.skel->getMass();
   m.bindFrames();
+}
+
+void WholeBodyModel::attachPointMass(dart::dynamics::Skeleton& skel, const std::string& link,
+                                     double mass, const Eigen::Vector3d& offset) {
+  dart::dynamics::BodyNode* bn = skel.getBodyNode(link);
+  if (!bn) throw InputError("payload link '" + link + "' is not a body of the robot");
+  const dart::dynamics::Inertia I = bn->getInertia();
+  const double m0 = I.getMass(), m1 = m0 + mass;
+  const Eigen::Vector3d c0 = I.getLocalCOM(), c1 = (m0 * c0 + mass * offset) / m1;
+  auto shifted = [](const Eigen::Vector3d& r) {
+    return (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose()).eval();
+  };
+  const Eigen::Matrix3d J = I.getMoment() + m0 * shifted(c0 - c1) + mass * shifted(offset - c1);
+  bn->setInertia(dart::dynamics::Inertia(m1, c1, J));
 }
 
 WholeBodyModel WholeBodyModel::fromFile(const std::string& yaml_path) {

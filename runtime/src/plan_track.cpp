@@ -48,6 +48,8 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
   duration_ = plan.duration();
   rate_ = plan.rate;
   gravity_ = d.gravity;
+  ft_bias_ = d.effects.ft_bias;
+  ft_scale_ = d.effects.ft_scale;
   for (const auto& p : plan.phases) {
     if (!p.right_contact && !p.left_contact)
       throw InputError("plan phase '" + p.name + "' has no foot in contact");
@@ -374,8 +376,9 @@ core::Vector6d PlanTrack::soleWrench(int index, int f, const core::Vector6d& ft)
 void PlanTrack::estimate(const TrackSample& s, const core::RobotState& st,
                          stabilizer::Measurement& out) const {
   const std::size_t k = static_cast<std::size_t>(s.index);
-  out.foot_wrench[0] = soleWrench(s.index, 0, st.ft_right);
-  out.foot_wrench[1] = soleWrench(s.index, 1, st.ft_left);
+  // Sensor readings corrected by the model's calibration (an identified bias and scale).
+  out.foot_wrench[0] = soleWrench(s.index, 0, (st.ft_right - ft_bias_[0]) / ft_scale_[0]);
+  out.foot_wrench[1] = soleWrench(s.index, 1, (st.ft_left - ft_bias_[1]) / ft_scale_[1]);
   for (int f = 0; f < 2; ++f)
     out.foot_pose[static_cast<std::size_t>(f)] = s.ref.foot[static_cast<std::size_t>(f)].pose;
   out.torso = st.imu_orientation;

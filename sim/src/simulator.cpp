@@ -132,19 +132,8 @@ Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& tr
   s.robot->setVelocities(Eigen::VectorXd::Zero(s.robot->getNumDofs()));
 
   // Payloads: mass and inertia merged into the link (point masses at an offset).
-  for (const auto& p : truth.payloads) {
-    dd::BodyNode* bn = s.robot->getBodyNode(p.link);
-    if (!bn) throw InputError("sim: payload link '" + p.link + "' is not a body of the robot");
-    dd::Inertia I = bn->getInertia();
-    const double m0 = I.getMass(), m1 = m0 + p.mass;
-    const Eigen::Vector3d c0 = I.getLocalCOM(), c1 = (m0 * c0 + p.mass * p.offset) / m1;
-    auto shifted = [](const Eigen::Vector3d& r) {
-      return (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose()).eval();
-    };
-    const Eigen::Matrix3d J =
-        I.getMoment() + m0 * shifted(c0 - c1) + p.mass * shifted(p.offset - c1);
-    bn->setInertia(dd::Inertia(m1, c1, J));
-  }
+  for (const auto& p : truth.payloads)
+    robots::WholeBodyModel::attachPointMass(*s.robot, p.link, p.mass, p.offset);
 
   for (int j = 0; j < s.model.actuatedCount(); ++j) {
     dd::DegreeOfFreedom* dof =

@@ -14,12 +14,13 @@
 #include "overstep/msgs/convert.hpp"
 #include "overstep/robots/whole_body_model.hpp"
 #include "overstep/sysid/identify.hpp"
+#include "overstep/sysid/overlay.hpp"
 
 namespace overstep {
 namespace {
 
 struct IdentifyCliOptions {
-  std::string log, plan, robot, residuals;
+  std::string log, plan, robot, residuals, out;
   bool json = false, no_torque = false, no_ground = false;
   double train = 0.6;
 };
@@ -93,6 +94,17 @@ int runIdentify(const IdentifyCliOptions& o) {
   io.use_force = !o.no_ground;
   io.dump_residuals = o.residuals;
   const sysid::Identification r = sysid::identify(data, plan, model, io);
+  std::string overlay_written;
+  if (!o.out.empty()) {
+    if (r.effect.empty()) {
+      std::fprintf(stderr, "identify: verdict %s: nothing to add, %s not written\n",
+                   r.verdict.c_str(), o.out.c_str());
+    } else {
+      core::writeFileAtomic(o.out, sysid::overlayYaml(r, model.description(), o.out,
+                                                      "log " + o.log + ", plan " + o.plan));
+      overlay_written = o.out;
+    }
+  }
   nlohmann::json j;
   j["verdict"] = r.verdict;
   j["effect"] = r.effect;
@@ -112,6 +124,7 @@ int runIdentify(const IdentifyCliOptions& o) {
                 {"rms_after", c.rms_after},
                 {"noise", c.noise}};
   j["channels"] = ch;
+  j["overlay"] = overlay_written;
   nlohmann::json cands = nlohmann::json::array();
   for (const auto& c : r.candidates)
     cands.push_back({{"name", c.name},
@@ -140,6 +153,8 @@ int runIdentify(const IdentifyCliOptions& o) {
     for (const auto& c : r.candidates)
       std::printf("%-26s %9.1f%% %10.3g%s\n", c.name.c_str(), 100.0 * c.reduction, c.f_statistic,
                   c.plausible ? "" : "  (implausible)");
+    if (!overlay_written.empty())
+      std::printf("model overlay: %s (use it as --robot)\n", overlay_written.c_str());
   }
   return kExitOk;
 }
@@ -159,6 +174,8 @@ void registerIdentifyCommand(CLI::App& app, cli::Registry& registry) {
   sub->add_flag("--no-torque", o->no_torque, "Leave the motor-torque channel out");
   sub->add_flag("--no-ground", o->no_ground,
                 "Leave the ground channels (ankle sensors' summed force and moment) out");
+  sub->add_option("--out", o->out,
+                  "Write the identified effect as a model overlay YAML (use it as --robot)");
   sub->add_option("--residuals", o->residuals,
                   "Write every residual row (channel, joint, t, residual, measured) to this CSV");
   sub->add_flag("--json", o->json,
@@ -169,6 +186,8 @@ void registerIdentifyCommand(CLI::App& app, cli::Registry& registry) {
       "  overstep plan --excite 8 --out excite.json\n"
       "  overstep demo --plan excite.json --truth truth.yaml --run-dir runs/excite\n"
       "  overstep identify runs/excite/bus.lcmlog --plan excite.json --json\n"
+      "  overstep identify runs/excite/bus.lcmlog --plan excite.json --out identified.yaml\n"
+      "  overstep plan --robot identified.yaml        # re-plan with the identified model\n"
       "Verdicts: identified, ambiguous (confusable candidates named), none, unexplained\n"
       "(docs/identification.md). Exit 2: a log without the needed channels, a plan that does\n"
       "not match the log or the robot, or too short a run.");

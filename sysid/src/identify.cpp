@@ -12,19 +12,24 @@ namespace overstep::sysid {
 namespace {
 
 struct Row {
-  int channel = 0;  // 0 position, 1 torque, 2 force, 3 moment
-  int joint = -1;   // actuated index (position, torque); axis 0 = x, 1 = y (moment)
+  int channel = 0;  // 0 position, 1 torque, 2 force, 3 moment, 4 torso orientation
+  int joint = -1;   // actuated index (position, torque); axis 0 = x, 1 = y (moment, orientation)
   int record = 0;
   int span = 1;  // records the row averages (from `record` on)
 };
 
-constexpr int kChannels = 4;
+constexpr int kChannels = 5;
 const char* const kChannelName[kChannels] = {"joint_position", "joint_torque", "force_sum",
-                                             "ground_moment"};
-const char* const kChannelUnit[kChannels] = {"rad", "N m", "N", "N m"};
+                                             "ground_moment", "torso_orientation"};
+const char* const kChannelUnit[kChannels] = {"rad", "N m", "N", "N m", "rad"};
+
+double rollOf(const Eigen::Matrix3d& R) { return std::atan2(R(2, 1), R(2, 2)); }
+double pitchOf(const Eigen::Matrix3d& R) { return std::asin(std::clamp(-R(2, 0), -1.0, 1.0)); }
 /// A channel whose held-out residual exceeds this many noise levels (RMS) shows an effect.
 constexpr double kResidualLevel = 1.5;
 constexpr double kGroundWindow = 0.05;  ///< s, averaging window of a ground-channel row
+/// Bushing deflection = kBushingSign x (sensor moment about its axis) / stiffness.
+constexpr double kBushingSign = 1.0;
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -110,6 +115,10 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     for (int k = 1; k + gw < N; k += gw) rows.push_back({2, -1, k, gw});
     for (int axis = 0; axis < 2; ++axis)
       for (int k = 1; k + gw < N; k += gw) rows.push_back({3, axis, k, gw});
+    // The torso's roll and pitch (IMU) against the kinematics of the encoders with the bushings
+    // deflected by the sensors' moments over their stiffness and the stance soles flat.
+    for (int axis = 0; axis < 2; ++axis)
+      for (int k = 1; k + gw < N; k += gw) rows.push_back({4, axis, k, gw});
   }
   const int R = static_cast<int>(rows.size());
   Eigen::VectorXd res(R);
@@ -131,8 +140,17 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     Eigen::Matrix<double, 6, 1> foot_meas[2];             // [F; M about the reference point], world
     Eigen::Vector3d payload_p = Eigen::Vector3d::Zero();  // payload link origin, relative
     Eigen::Matrix3d payload_R = Eigen::Matrix3d::Identity();
+    Eigen::Vector2d torso_meas = Eigen::Vector2d::Zero(), torso_pred = Eigen::Vector2d::Zero();
+    /// d(torso roll, pitch) / d(compliance of the roll and pitch bushings): the moments they
+    /// carry through the kinematics (columns: roll compliance, pitch compliance).
+    Eigen::Matrix2d torso_dc = Eigen::Matrix2d::Zero();
+    /// The same for each foot's sensor: its scale (col. 0, per unit of scale - 1) and its tilting
+    /// moment biases (col. 1 Mx, col. 2 My): they change the moments the prediction uses.
+    Eigen::Matrix<double, 2, 3> torso_ft[2] = {Eigen::Matrix<double, 2, 3>::Zero(),
+                                               Eigen::Matrix<double, 2, 3>::Zero()};
   };
   std::vector<Ground> ground(static_cast<std::size_t>(N));
+  double spring[4] = {0.0, 0.0, 0.0, 0.0};  // bushing spring torques, N m (filtered moments)
   for (int k = 1; k + 1 < N; ++k) {
     const Record& r = data.records[static_cast<std::size_t>(k)];
     const int s =
@@ -207,11 +225,76 @@ Identification identify(const Dataset& data, const core::Plan& plan,
         const Eigen::Isometry3d Xs = model.framePose(sensor_frame[f]);
         gr.sensor_p[f] = Xs.translation() - P;
         gr.sensor_R[f] = Xs.linear();
-        const Eigen::Vector3d Fw = Xs.linear() * r.ft[f].head<3>();
-        const Eigen::Vector3d Mw = Xs.linear() * r.ft[f].tail<3>() + gr.sensor_p[f].cross(Fw);
+        // Readings through the model's calibration (an overlay's identified bias and scale).
+        const Eigen::Matrix<double, 6, 1> ft = d.effects.calibrated(f, r.ft[f]);
+        const Eigen::Vector3d Fw = Xs.linear() * ft.head<3>();
+        const Eigen::Vector3d Mw = Xs.linear() * ft.tail<3>() + gr.sensor_p[f].cross(Fw);
         gr.foot_meas[f] << Fw, Mw;
         gr.F_meas += Fw;
         gr.M_meas += Mw;
+      }
+      {
+        // Torso orientation: measured (IMU) and predicted (encoders, bushings at moment /
+        // stiffness, each stance sole flat at its planned pose; the mean over stance feet).
+        const Eigen::Matrix3d R_base_meas = r.imu.toRotationMatrix() *
+                                            model.framePose(imu_frame).linear().transpose() *
+                                            model.framePose(base_frame).linear();
+        gr.torso_meas = {rollOf(R_base_meas), pitchOf(R_base_meas)};
+        // The spring carries the moment less the damper's share: k delta + c delta' = M, i.e.
+        // k delta is M through a first-order low-pass of time constant c / k (exact per period).
+        // (The static k delta = M left 0.85 mrad RMS of pitch residual on clean data, ~ c delta'.)
+        double moment[4];
+        for (int f = 0; f < 2; ++f) {
+          const Eigen::Matrix<double, 6, 1> ft = d.effects.calibrated(f, r.ft[f]);
+          const double m_axis[2] = {ft(3), ft(4)};  // about the sensor's x (roll), y (pitch)
+          for (int ax = 0; ax < 2; ++ax) {
+            const int e = 2 * f + ax;
+            const auto& ej = d.elastic[static_cast<std::size_t>(e)];
+            const double keep =
+                ej.damping > 0.0 ? std::exp(-ej.stiffness * data.period / ej.damping) : 0.0;
+            spring[e] = k == 1 ? m_axis[ax] : keep * spring[e] + (1.0 - keep) * m_axis[ax];
+            moment[e] = spring[e];
+          }
+        }
+        const auto& phs = plan.phases[static_cast<std::size_t>(plan.phase(s))];
+        auto predict = [&](const double* deflection_delta) {
+          Eigen::VectorXd qp = q;
+          for (int e = 0; e < 4; ++e)
+            qp(model.elasticCoordinate(e)) =
+                kBushingSign * moment[e] / d.elastic[static_cast<std::size_t>(e)].stiffness +
+                deflection_delta[e];
+          Eigen::Vector2d tilt = Eigen::Vector2d::Zero();
+          int n = 0;
+          for (int f = 0; f < 2; ++f) {
+            if (!(f == 0 ? phs.right_contact : phs.left_contact)) continue;
+            const Eigen::MatrixXd& pose = f == 0 ? plan.right_foot : plan.left_foot;
+            Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+            X.translation() = pose.col(s).head<3>();
+            X.linear() = Eigen::Quaterniond(pose(3, s), pose(4, s), pose(5, s), pose(6, s))
+                             .normalized()
+                             .toRotationMatrix();
+            Eigen::VectorXd qa = qp, v0 = Eigen::VectorXd::Zero(model.dofs()), a0 = v0;
+            model.anchorBase(soles[f], X, qa, v0, a0);
+            model.setPositions(qa);
+            const Eigen::Matrix3d Rb = model.framePose(base_frame).linear();
+            tilt += Eigen::Vector2d(rollOf(Rb), pitchOf(Rb));
+            ++n;
+          }
+          return n > 0 ? Eigen::Vector2d(tilt / n) : tilt;
+        };
+        const double zero[4] = {0.0, 0.0, 0.0, 0.0};
+        gr.torso_pred = predict(zero);
+        const double h = 1e-5;  // rad
+        for (int e = 0; e < 4; ++e) {
+          double dd[4] = {0.0, 0.0, 0.0, 0.0};
+          dd[e] = h;
+          const Eigen::Vector2d de = (predict(dd) - gr.torso_pred) / h;  // d tilt / d deflection
+          const double k_e = d.elastic[static_cast<std::size_t>(e)].stiffness;
+          gr.torso_dc.col(e % 2) += de * kBushingSign * moment[e];
+          gr.torso_ft[e / 2].col(0) -= de * kBushingSign * moment[e] / k_e;
+          gr.torso_ft[e / 2].col(1 + e % 2) -= de * kBushingSign / k_e;
+        }
+        model.setState(q, v, a);
       }
       if (payload_frame >= 0) {
         const Eigen::Isometry3d Xl = model.framePose(payload_frame);
@@ -243,6 +326,11 @@ Identification identify(const Dataset& data, const core::Plan& plan,
         a.M_pred += b.M_pred;
         a.payload_p += b.payload_p;
         a.payload_R += b.payload_R;
+        a.torso_meas += b.torso_meas;
+        a.torso_pred += b.torso_pred;
+        a.torso_dc += b.torso_dc;
+        a.torso_ft[0] += b.torso_ft[0];
+        a.torso_ft[1] += b.torso_ft[1];
         for (int f = 0; f < 2; ++f) {
           a.sensor_p[f] += b.sensor_p[f];
           a.sensor_R[f] += b.sensor_R[f];
@@ -256,6 +344,11 @@ Identification identify(const Dataset& data, const core::Plan& plan,
       a.M_pred *= inv;
       a.payload_p *= inv;
       a.payload_R *= inv;
+      a.torso_meas *= inv;
+      a.torso_pred *= inv;
+      a.torso_dc *= inv;
+      a.torso_ft[0] *= inv;
+      a.torso_ft[1] *= inv;
       for (int f = 0; f < 2; ++f) {
         a.sensor_p[f] *= inv;
         a.sensor_R[f] *= inv;
@@ -274,8 +367,9 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     } else {
       // The sensors carry what the motion needs from the ground plus the weight below them.
       const Ground& gr = ground[static_cast<std::size_t>(w.record)];
-      res(i) =
-          w.channel == 2 ? gr.F_meas.z() - gr.F_pred.z() : gr.M_meas(w.joint) - gr.M_pred(w.joint);
+      res(i) = w.channel == 2   ? gr.F_meas.z() - gr.F_pred.z()
+               : w.channel == 3 ? gr.M_meas(w.joint) - gr.M_pred(w.joint)
+                                : gr.torso_meas(w.joint) - gr.torso_pred(w.joint);
     }
   }
   if (!o.dump_residuals.empty()) {
@@ -287,9 +381,10 @@ Identification identify(const Dataset& data, const core::Plan& plan,
       const double meas = w.channel == 0   ? r.q(w.joint)
                           : w.channel == 1 ? r.tau(w.joint)
                           : w.channel == 2 ? gr.F_meas.z()
-                                           : gr.M_meas(w.joint);
+                          : w.channel == 3 ? gr.M_meas(w.joint)
+                                           : gr.torso_meas(w.joint);
       csv += std::string(kChannelName[w.channel]) + "," +
-             (w.channel == 3 ? std::string(w.joint == 0 ? "x" : "y")
+             (w.channel >= 3 ? std::string(w.joint == 0 ? "x" : "y")
               : w.joint >= 0 ? d.actuated[static_cast<std::size_t>(w.joint)].name
                              : std::string()) +
              "," + std::to_string(r.t) + "," + std::to_string(res(i)) + "," + std::to_string(meas) +
@@ -298,7 +393,7 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     core::writeFileAtomic(o.dump_residuals, csv);
   }
   // Noise per channel: robust, from consecutive differences (a smooth effect cancels there).
-  double sigma[kChannels] = {1.0, 1.0, 1.0, 1.0};
+  double sigma[kChannels] = {1.0, 1.0, 1.0, 1.0, 1.0};
   for (int ch = 0; ch < kChannels; ++ch) {
     std::vector<double> dd;
     for (int i = 0; i + 1 < R; ++i) {
@@ -309,6 +404,25 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     }
     const double s = 1.4826 * median(dd) / std::sqrt(2.0);
     sigma[ch] = s > 0.0 ? s : 1.0;
+  }
+  {
+    // The torso tilt is predicted to 0.5 % of its swing on clean data (the bushings' linear
+    // spring-damper against the simulator's) while its noise is far smaller: the channel's scale
+    // is at least 1 % of the tilt's RMS swing, so that this resolution is not read as an effect.
+    double sum = 0.0, sum2 = 0.0;
+    int n4 = 0;
+    for (int i = 0; i < R; ++i) {
+      const Row& w = rows[static_cast<std::size_t>(i)];
+      if (w.channel != 4) continue;
+      const double m = ground[static_cast<std::size_t>(w.record)].torso_meas(w.joint);
+      sum += m;
+      sum2 += m * m;
+      ++n4;
+    }
+    if (n4 > 1) {
+      const double sd = std::sqrt(std::max(sum2 / n4 - (sum / n4) * (sum / n4), 0.0));
+      sigma[4] = std::max(sigma[4], 0.01 * sd);
+    }
   }
   Eigen::VectorXd wgt(R);
   for (int i = 0; i < R; ++i) wgt(i) = 1.0 / sigma[rows[static_cast<std::size_t>(i)].channel];
@@ -373,6 +487,20 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     }
     cands.push_back(std::move(c));
   }
+  // Ankle bushing stiffness: a change of compliance (1/k) of the roll and of the pitch bushings
+  // (both feet) tilts the torso by the moments they carry.
+  {
+    Candidate c{"ankle_stiffness",
+                {"compliance_roll", "compliance_pitch"},
+                Eigen::MatrixXd::Zero(R, 2),
+                {}};
+    for (int i = 0; i < R; ++i) {
+      const Row& w = rows[static_cast<std::size_t>(i)];
+      if (w.channel == 4)
+        c.X.row(i) = ground[static_cast<std::size_t>(w.record)].torso_dc.row(w.joint);
+    }
+    cands.push_back(std::move(c));
+  }
   // Force sensor bias (normal force and the two tilting moments, sensor frame) and scale, per
   // foot: what the sensor adds, carried to the world frame and the reference point.
   for (int f = 0; f < 2; ++f) {
@@ -385,7 +513,11 @@ Identification identify(const Dataset& data, const core::Plan& plan,
       if (w.channel < 2) continue;
       const Ground& gr = ground[static_cast<std::size_t>(w.record)];
       const Eigen::Matrix3d& Rs = gr.sensor_R[f];
-      if (w.channel == 2) {
+      if (w.channel == 4) {
+        bias.X(i, 1) = gr.torso_ft[f](w.joint, 1);
+        bias.X(i, 2) = gr.torso_ft[f](w.joint, 2);
+        scale.X(i, 0) = gr.torso_ft[f](w.joint, 0);
+      } else if (w.channel == 2) {
         bias.X(i, 0) = Rs(2, 2);
         scale.X(i, 0) = gr.foot_meas[f](2);
       } else {

@@ -76,14 +76,17 @@ robots::WholeBodyModel* Identify::model_ = nullptr;
 stabilizer::Params* Identify::params_ = nullptr;
 core::Plan* Identify::plan_ = nullptr;
 
+// The false-positive rate: clean runs over 20 seeds give "none" in at least 95 % of them.
 TEST_F(Identify, CleanRunsFindNothing) {
   int none = 0;
-  for (unsigned seed : {1u, 2u, 3u, 4u}) {
+  const int runs = 20;
+  for (unsigned seed = 1; seed <= static_cast<unsigned>(runs); ++seed) {
     const auto r = run(sim::noTruthEffects(*model_), seed);
     none += r.verdict == "none";
-    EXPECT_EQ(r.verdict, "none") << "seed " << seed << ": " << describe(r);
+    if (r.verdict != "none") std::printf("seed %u: %s\n", seed, describe(r).c_str());
   }
-  EXPECT_EQ(none, 4);
+  std::printf("clean runs: %d of %d none\n", none, runs);
+  EXPECT_GE(none, 19);
 }
 
 TEST_F(Identify, CommandDelayAndLagAreTheDocumentedPair) {
@@ -159,6 +162,27 @@ TEST_F(Identify, ForceSensorBiasIsNamed) {
     // error at nearly constant load): the verdict must include the left bias.
     EXPECT_TRUE(names(r, "ft_bias_left")) << b << " N: " << describe(r);
     expectValue(r, "ft_bias_left", "fz_bias", b);
+    EXPECT_LT(r.error_after, 0.3 * r.error_before) << describe(r);
+  }
+}
+
+// Softer or stiffer ankle bushings tilt the torso more or less under the moments the ankle
+// sensors measure.
+TEST_F(Identify, AnkleStiffnessIsIdentified) {
+  for (double factor : {0.7, 1.4}) {
+    sim::TruthEffects t = sim::noTruthEffects(*model_);
+    for (auto& k : t.elastic_stiffness) k *= factor;
+    t.elastic_changed = true;
+    const auto r = run(t, 29);
+    std::printf("ankle stiffness x%g: %s\n", factor, describe(r).c_str());
+    EXPECT_TRUE(names(r, "ankle_stiffness")) << factor << ": " << describe(r);
+    if (!names(r, "ankle_stiffness")) continue;
+    const auto& d = model_->description();
+    // Compliance change of the roll (index 0) and pitch (index 1) bushings.
+    expectValue(r, "ankle_stiffness", "compliance_roll",
+                1.0 / (factor * d.elastic[0].stiffness) - 1.0 / d.elastic[0].stiffness);
+    expectValue(r, "ankle_stiffness", "compliance_pitch",
+                1.0 / (factor * d.elastic[1].stiffness) - 1.0 / d.elastic[1].stiffness);
     EXPECT_LT(r.error_after, 0.3 * r.error_before) << describe(r);
   }
 }

@@ -6,6 +6,7 @@
 /// Units: SI (m, kg, s, rad, N, N m).
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -77,6 +78,37 @@ struct CapsuleDescription {
   double radius = 0.0;
 };
 
+/// A point mass rigidly attached to a link (offset in the link frame), e.g. a payload.
+struct PayloadDescription {
+  std::string link;
+  double mass = 0.0;  ///< kg
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+};
+
+/// Effects a model overlay adds to the base description (docs/model-overlay.md): what
+/// `overstep identify` found. The same keys as the simulator's truth file.
+struct ModelEffects {
+  std::vector<PayloadDescription> payloads;  ///< merged into their links' inertia by robots/
+  Eigen::VectorXd viscous, coulomb;  ///< per actuated joint, N m s/rad and N m (size 0: none)
+  double command_delay = 0.0;        ///< s, from a command to its effect at the joints
+  double command_lag = 0.0;          ///< s, first-order lag of the joint servos
+  /// Force sensors (right, left): measured = scale * true + bias ([F; M], sensor frame).
+  std::array<Eigen::Matrix<double, 6, 1>, 2> ft_bias{
+      {Eigen::Matrix<double, 6, 1>::Zero(), Eigen::Matrix<double, 6, 1>::Zero()}};
+  std::array<double, 2> ft_scale{{1.0, 1.0}};
+  bool empty() const {
+    return payloads.empty() && (viscous.size() == 0 || viscous.isZero()) &&
+           (coulomb.size() == 0 || coulomb.isZero()) && command_delay == 0.0 &&
+           command_lag == 0.0 && ft_bias[0].isZero() && ft_bias[1].isZero() && ft_scale[0] == 1.0 &&
+           ft_scale[1] == 1.0;
+  }
+  /// The true force-sensor wrench from a measured one (foot 0 right, 1 left).
+  Eigen::Matrix<double, 6, 1> calibrated(int foot, const Eigen::Matrix<double, 6, 1>& m) const {
+    const auto f = static_cast<std::size_t>(foot);
+    return (m - ft_bias[f]) / ft_scale[f];
+  }
+};
+
 /// Everything robots/<robot>/<robot>.yaml says. Loaded and validated by loadRobotDescription().
 struct RobotDescription {
   std::string name;
@@ -93,6 +125,9 @@ struct RobotDescription {
   Eigen::VectorXd half_sitting;      ///< actuated joint angles, rad (size = actuated.size())
   double acceleration_limit = 30.0;  ///< rad/s^2, for planners
   std::uint64_t content_hash = 0;    ///< FNV-1a of the YAML and URDF file contents
+  /// Overlays (a YAML with `base: FILE`): the base description's file, and the effects added.
+  std::string base_yaml;
+  ModelEffects effects;
 
   int actuatedIndex(const std::string& joint) const;           ///< -1 if absent
   int elasticIndex(const std::string& joint) const;            ///< -1 if absent
@@ -101,7 +136,10 @@ struct RobotDescription {
   std::string hashHex() const;
 };
 
-/// Loads and validates a robot YAML. Throws InputError with a one-line message naming the file and
+/// Loads and validates a robot YAML, or a model overlay (a YAML whose `base:` names the robot
+/// YAML it modifies; docs/model-overlay.md): the base is loaded, then the overlay's elastic
+/// joint parameters replace the base's and its effects are recorded; the hash covers both files.
+/// Throws InputError with a one-line message naming the file and
 /// the offending key on a missing file, malformed YAML, a missing key or an invalid value
 /// (negative stiffness, inverted limits, half-sitting outside the limits, ...).
 RobotDescription loadRobotDescription(const std::string& yaml_path);

@@ -56,8 +56,10 @@ struct PlannerConfig {
   double swept_clearance = 1.0;
   /// 1: the plan file's passive (elastic) coordinates are integrated between the collocation
   /// samples so that they obey their equations of motion under the planned joint trajectories
-  /// (OverstepProblem::toPlan, docs/planner.md); 0: the splines as solved.
-  double passive_polish = 1.0;
+  /// (OverstepProblem::toPlan, docs/planner.md); 2 (default): the same, with the correction
+  /// blended back to zero before each lift-off, where the unloading foot's wrench must vanish;
+  /// 0: the splines as solved.
+  double passive_polish = 2.0;
   /// 1: an extra sample half an interval before each lift-off (the sway balance only) and
   /// touchdown (the landing sole's corners only); 0: none (default: with them SLSQP stalled at
   /// scaled violations of 0.8-1 in every 5 cm run; docs/planner.md).

@@ -147,6 +147,10 @@ class WholeBodyModel {
   /// The DART skeleton (in DART's own coordinate order!). For the planner's and the simulator's
   /// use only; see dartIndex() for the permutation.
   std::shared_ptr<dart::dynamics::Skeleton> skeleton() const;
+  /// Merges a point mass at `offset` (link frame) into the body `link` of `skel` (mass, CoM and
+  /// rotational inertia): a payload. InputError when the body does not exist.
+  static void attachPointMass(dart::dynamics::Skeleton& skel, const std::string& link, double mass,
+                              const Eigen::Vector3d& offset);
   /// DART generalized-coordinate index of model coordinate i.
   int dartIndex(int i) const;
 

@@ -121,6 +121,9 @@ class PlanTrack {
   Eigen::MatrixXd below_com_[2];    ///< 3 x N, CoM of the bodies below each sensor
   double below_mass_[2] = {0.0, 0.0};
   double gravity_ = 9.81;
+  /// Force-sensor calibration from a model overlay (bias and scale; identity without one).
+  std::array<core::Vector6d, 2> ft_bias_{{core::Vector6d::Zero(), core::Vector6d::Zero()}};
+  std::array<double, 2> ft_scale_{{1.0, 1.0}};
   std::unique_ptr<robots::WholeBodyModel> model_;  ///< for planMove (not used in the tick)
   Eigen::VectorXd q0_;                             ///< the plan's first sample (all coordinates)
   int sole_frame_[2] = {-1, -1};
