@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "overstep/core/effects_yaml.hpp"
 #include "overstep/core/error.hpp"
 #include "overstep/core/yaml_reader.hpp"
 
@@ -102,19 +103,15 @@ RobotDescription loadOverlay(const std::string& yaml_path, const std::string& te
   d.yaml_path = yaml_path;
   ModelEffects& e = d.effects;
   if (const YAML::Node a = root["ankle"]) {
-    if (!a.IsMap())
-      r.fail("ankle", "expected a map from elastic joint name to {stiffness, damping}");
-    for (const auto& kv : a) {
-      const std::string name = kv.first.as<std::string>();
-      const int i = d.elasticIndex(name);
-      const std::string key = "ankle." + name;
-      if (i < 0) r.fail(key, "unknown elastic joint");
-      r.onlyKeys(kv.second, key, {"stiffness", "damping"});
-      auto& ej = d.elastic[static_cast<std::size_t>(i)];
-      if (kv.second["stiffness"])
-        ej.stiffness = r.positiveValue(kv.second["stiffness"], key + ".stiffness");
-      if (kv.second["damping"])
-        ej.damping = r.valueAtLeast(kv.second["damping"], key + ".damping", 0.0);
+    std::vector<double> k, c;
+    for (const auto& ej : d.elastic) {
+      k.push_back(ej.stiffness);
+      c.push_back(ej.damping);
+    }
+    parseAnkles(a, r, d, k, c);
+    for (std::size_t i = 0; i < d.elastic.size(); ++i) {
+      d.elastic[i].stiffness = k[i];
+      d.elastic[i].damping = c[i];
     }
   }
   if (const YAML::Node f = root["friction"]) {
@@ -133,42 +130,17 @@ RobotDescription loadOverlay(const std::string& yaml_path, const std::string& te
     }
   }
   if (const YAML::Node p = root["payload"]) {
-    if (!p.IsSequence()) r.fail("payload", "expected a list of {link, mass, offset}");
-    for (std::size_t k = 0; k < p.size(); ++k) {
-      const std::string key = "payload[" + std::to_string(k) + "]";
-      r.onlyKeys(p[k], key, {"link", "mass", "offset"});
-      if (!p[k]["link"] || !p[k]["mass"]) r.fail(key, "needs 'link' and 'mass'");
-      PayloadDescription pl;
-      pl.link = r.as<std::string>(p[k]["link"], key + ".link");
-      pl.mass = r.positiveValue(p[k]["mass"], key + ".mass");
-      if (const YAML::Node o = p[k]["offset"]) {
-        pl.offset = r.vector<3>(o, key + ".offset");
-        if (pl.offset.cwiseAbs().maxCoeff() > 1.0) r.fail(key + ".offset", "expected |x| <= 1 m");
-      }
-      e.payloads.push_back(pl);  // the link is checked where the model is built (robots/)
-    }
+    const auto more = parsePayloads(p, r);
+    e.payloads.insert(e.payloads.end(), more.begin(), more.end());
   }
-  if (const YAML::Node c = root["command"]) {
-    r.onlyKeys(c, "command", {"delay", "lag"});
-    if (c["delay"]) e.command_delay = r.valueAtLeast(c["delay"], "command.delay", 0.0);
-    if (c["lag"]) e.command_lag = r.valueAtLeast(c["lag"], "command.lag", 0.0);
-    if (e.command_delay > 1.0 || e.command_lag > 1.0) r.fail("command", "expected <= 1 s");
-  }
+  if (const YAML::Node c = root["command"])
+    parseCommandTiming(c, r, e.command_delay, e.command_lag);
   if (const YAML::Node f = root["ft_sensor"]) {
-    r.onlyKeys(f, "ft_sensor", {"right", "left"});
-    for (int i = 0; i < 2; ++i) {
-      const char* side = i == 0 ? "right" : "left";
-      const YAML::Node s = f[side];
-      if (!s) continue;
-      const std::string key = std::string("ft_sensor.") + side;
-      r.onlyKeys(s, key, {"bias", "scale"});
-      if (s["bias"]) e.ft_bias[static_cast<std::size_t>(i)] = r.vector<6>(s["bias"], key + ".bias");
-      if (s["scale"]) {
-        e.ft_scale[static_cast<std::size_t>(i)] = r.positiveValue(s["scale"], key + ".scale");
-        if (std::abs(e.ft_scale[static_cast<std::size_t>(i)] - 1.0) > 0.5)
-          r.fail(key + ".scale", "expected 0.5 .. 1.5");
-      }
-    }
+    parseForceSensors(f, r, e.ft_bias, e.ft_scale);
+    for (int i = 0; i < 2; ++i)
+      if (std::abs(e.ft_scale[static_cast<std::size_t>(i)] - 1.0) > 0.5)
+        r.fail(std::string("ft_sensor.") + (i == 0 ? "right" : "left") + ".scale",
+               "expected 0.5 .. 1.5");
   }
   d.content_hash = fnv1a64(text, d.content_hash);
   return d;
@@ -322,5 +294,65 @@ RobotDescription loadRobotDescriptionAt(const std::string& yaml_path, int depth)
 }
 
 }  // namespace
+
+std::vector<PayloadDescription> parsePayloads(const YAML::Node& p, const YamlReader& r) {
+  if (!p.IsSequence()) r.fail("payload", "expected a list of {link, mass, offset}");
+  std::vector<PayloadDescription> out;
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    const std::string key = "payload[" + std::to_string(k) + "]";
+    r.onlyKeys(p[k], key, {"link", "mass", "offset"});
+    if (!p[k]["link"] || !p[k]["mass"]) r.fail(key, "needs 'link' and 'mass'");
+    PayloadDescription pl;
+    pl.link = r.as<std::string>(p[k]["link"], key + ".link");
+    pl.mass = r.positiveValue(p[k]["mass"], key + ".mass");
+    if (const YAML::Node o = p[k]["offset"]) {
+      pl.offset = r.vector<3>(o, key + ".offset");
+      if (pl.offset.cwiseAbs().maxCoeff() > 1.0) r.fail(key + ".offset", "expected |x| <= 1 m");
+    }
+    out.push_back(pl);
+  }
+  return out;
+}
+
+void parseAnkles(const YAML::Node& a, const YamlReader& r, const RobotDescription& d,
+                 std::vector<double>& stiffness, std::vector<double>& damping) {
+  if (!a.IsMap()) r.fail("ankle", "expected a map from elastic joint name to {stiffness, damping}");
+  for (const auto& kv : a) {
+    const std::string name = kv.first.as<std::string>();
+    const int i = d.elasticIndex(name);
+    const std::string key = "ankle." + name;
+    if (i < 0) r.fail(key, "unknown elastic joint");
+    r.onlyKeys(kv.second, key, {"stiffness", "damping"});
+    if (kv.second["stiffness"])
+      stiffness[static_cast<std::size_t>(i)] =
+          r.positiveValue(kv.second["stiffness"], key + ".stiffness");
+    if (kv.second["damping"])
+      damping[static_cast<std::size_t>(i)] =
+          r.valueAtLeast(kv.second["damping"], key + ".damping", 0.0);
+  }
+}
+
+void parseCommandTiming(const YAML::Node& c, const YamlReader& r, double& delay, double& lag) {
+  r.onlyKeys(c, "command", {"delay", "lag"});
+  if (c["delay"]) delay = r.valueAtLeast(c["delay"], "command.delay", 0.0);
+  if (c["lag"]) lag = r.valueAtLeast(c["lag"], "command.lag", 0.0);
+  if (delay > 1.0 || lag > 1.0) r.fail("command", "expected <= 1 s");
+}
+
+void parseForceSensors(const YAML::Node& f, const YamlReader& r,
+                       std::array<Eigen::Matrix<double, 6, 1>, 2>& bias,
+                       std::array<double, 2>& scale) {
+  r.onlyKeys(f, "ft_sensor", {"right", "left"});
+  for (int i = 0; i < 2; ++i) {
+    const char* side = i == 0 ? "right" : "left";
+    const YAML::Node s = f[side];
+    if (!s) continue;
+    const std::string key = std::string("ft_sensor.") + side;
+    r.onlyKeys(s, key, {"bias", "scale"});
+    if (s["bias"]) bias[static_cast<std::size_t>(i)] = r.vector<6>(s["bias"], key + ".bias");
+    if (s["scale"])
+      scale[static_cast<std::size_t>(i)] = r.positiveValue(s["scale"], key + ".scale");
+  }
+}
 
 }  // namespace overstep::core

@@ -50,9 +50,7 @@ struct Row {
   int stab_mode = 0;
 };
 
-std::string defaultScript() {
-  return (fs::path(OVERSTEP_DATA_DIR) / "monitor" / "python" / "report_plots.py").string();
-}
+std::string defaultScript() { return shippedScript("monitor/python/report_plots.py"); }
 
 void setMeasured(robots::WholeBodyModel& model, const Row& r, int base_frame, Eigen::VectorXd& q) {
   q.setZero(model.dofs());
@@ -330,6 +328,35 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
   return sum.ticks;
 }
 
+std::string shippedScript(const std::string& relative) {
+  return (fs::path(OVERSTEP_DATA_DIR) / relative).string();
+}
+
+void runPlotScript(const std::string& python, const std::string& script,
+                   const std::vector<std::string>& args, const std::string& what) {
+  if (!fs::exists(script)) throw InputError(script + ": plotting script not found");
+  std::vector<std::string> all = {python, script};
+  all.insert(all.end(), args.begin(), args.end());
+  std::string cmd;
+  std::vector<char*> argv;
+  for (auto& a : all) {
+    cmd += (cmd.empty() ? "" : " ") + a;
+    argv.push_back(const_cast<char*>(a.c_str()));
+  }
+  argv.push_back(nullptr);
+  pid_t pid = -1;
+  if (posix_spawnp(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ) != 0)
+    throw std::runtime_error(what + ": cannot start " + python);
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    throw std::runtime_error(what + ": the plotting script failed (" + cmd + ", status " +
+                             std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
+                             "); is python3-matplotlib installed?");
+  }
+}
+
 ReportSummary makeReport(const ReportOptions& o_in) {
   ReportOptions o = o_in;
   if (o.out.empty()) o.out = (fs::path(o.run_dir) / "report").string();
@@ -338,22 +365,7 @@ ReportSummary makeReport(const ReportOptions& o_in) {
   ReportSummary sum;
   writeReportData(o, sum);
   if (!fs::exists(o.script)) throw InputError(o.script + ": plotting script not found");
-  const std::string dpi = std::to_string(o.dpi);
-  const std::string cmd = o.python + " " + o.script + " " + o.out + " " + dpi;
-  std::vector<char*> argv = {const_cast<char*>(o.python.c_str()),
-                             const_cast<char*>(o.script.c_str()), const_cast<char*>(o.out.c_str()),
-                             const_cast<char*>(dpi.c_str()), nullptr};
-  pid_t pid = -1;
-  int rc = posix_spawnp(&pid, o.python.c_str(), nullptr, nullptr, argv.data(), environ);
-  if (rc != 0) throw std::runtime_error("report: cannot start " + o.python);
-  int status = 0;
-  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-    throw std::runtime_error("report: the plotting script failed (" + cmd + ", status " +
-                             std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
-                             "); is python3-matplotlib installed?");
-  }
+  runPlotScript(o.python, o.script, {o.out, std::to_string(o.dpi)}, "report");
   sum.index_html = (fs::path(o.out) / "index.html").string();
   sum.manifest = (fs::path(o.out) / "report.json").string();
   std::ifstream in(sum.manifest);

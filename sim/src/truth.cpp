@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include "overstep/core/effects_yaml.hpp"
 #include "overstep/core/error.hpp"
 #include "overstep/core/yaml_reader.hpp"
 
@@ -96,25 +97,10 @@ TruthEffects loadTruth(const std::string& path, const robots::WholeBodyModel& mo
   r.onlyKeys(root, "", {"ankle", "friction", "payload", "command", "ft_sensor", "backlash"});
 
   if (const YAML::Node a = root["ankle"]) {
-    if (!a.IsMap())
-      r.fail("ankle", "expected a map from elastic joint name to {stiffness, damping}");
-    for (const auto& kv : a) {
-      const std::string name = kv.first.as<std::string>();
-      const int i = d.elasticIndex(name);
-      if (i < 0) r.fail("ankle." + name, "unknown elastic joint");
-      const std::string key = "ankle." + name;
-      r.onlyKeys(kv.second, key, {"stiffness", "damping"});
-      if (kv.second["stiffness"])
-        t.elastic_stiffness[static_cast<std::size_t>(i)] =
-            r.positiveValue(kv.second["stiffness"], key + ".stiffness");
-      if (kv.second["damping"])
-        t.elastic_damping[static_cast<std::size_t>(i)] =
-            r.valueAtLeast(kv.second["damping"], key + ".damping", 0.0);
-      const auto& e = d.elastic[static_cast<std::size_t>(i)];
-      t.elastic_changed = t.elastic_changed ||
-                          t.elastic_stiffness[static_cast<std::size_t>(i)] != e.stiffness ||
-                          t.elastic_damping[static_cast<std::size_t>(i)] != e.damping;
-    }
+    core::parseAnkles(a, r, d, t.elastic_stiffness, t.elastic_damping);
+    for (std::size_t i = 0; i < d.elastic.size(); ++i)
+      t.elastic_changed = t.elastic_changed || t.elastic_stiffness[i] != d.elastic[i].stiffness ||
+                          t.elastic_damping[i] != d.elastic[i].damping;
   }
   // A list of {joints: <joint, group or list>, <fields>}; `allowed` includes "joints".
   auto perJoint = [&](const char* section, std::initializer_list<const char*> allowed,
@@ -144,39 +130,21 @@ TruthEffects loadTruth(const std::string& path, const robots::WholeBodyModel& mo
              for (int j : js) t.backlash(j) = w;
            });
   if (const YAML::Node p = root["payload"]) {
-    if (!p.IsSequence()) r.fail("payload", "expected a list of {link, mass, offset}");
-    for (std::size_t k = 0; k < p.size(); ++k) {
-      const std::string key = "payload[" + std::to_string(k) + "]";
-      r.onlyKeys(p[k], key, {"link", "mass", "offset"});
-      Payload pl;
-      if (!p[k]["link"] || !p[k]["mass"]) r.fail(key, "needs 'link' and 'mass'");
-      pl.link = p[k]["link"].as<std::string>();
-      if (!model.hasFrame(pl.link)) r.fail(key + ".link", "unknown link '" + pl.link + "'");
-      pl.mass = r.positiveValue(p[k]["mass"], key + ".mass");
-      if (const YAML::Node o = p[k]["offset"]) {
-        pl.offset = r.vector<3>(o, key + ".offset");
-        if (pl.offset.cwiseAbs().maxCoeff() > 1.0) r.fail(key + ".offset", "expected |x| <= 1 m");
-      }
-      t.payloads.push_back(pl);
-    }
+    t.payloads = core::parsePayloads(p, r);
+    for (std::size_t k = 0; k < t.payloads.size(); ++k)
+      if (!model.hasFrame(t.payloads[k].link))
+        r.fail("payload[" + std::to_string(k) + "].link",
+               "unknown link '" + t.payloads[k].link + "'");
   }
-  if (const YAML::Node c = root["command"]) {
-    r.onlyKeys(c, "command", {"delay", "lag"});
-    if (c["delay"]) t.command_delay = r.valueAtLeast(c["delay"], "command.delay", 0.0);
-    if (c["lag"]) t.command_lag = r.valueAtLeast(c["lag"], "command.lag", 0.0);
-    if (t.command_delay > 1.0 || t.command_lag > 1.0) r.fail("command", "expected <= 1 s");
-  }
+  if (const YAML::Node c = root["command"])
+    core::parseCommandTiming(c, r, t.command_delay, t.command_lag);
   if (const YAML::Node f = root["ft_sensor"]) {
-    r.onlyKeys(f, "ft_sensor", {"right", "left"});
-    for (int side = 0; side < 2; ++side) {
-      const char* name = side == 0 ? "right" : "left";
-      const YAML::Node s = f[name];
-      if (!s) continue;
-      const std::string key = std::string("ft_sensor.") + name;
-      r.onlyKeys(s, key, {"bias", "scale"});
-      auto& e = t.ft[static_cast<std::size_t>(side)];
-      if (s["scale"]) e.scale = r.positiveValue(s["scale"], key + ".scale");
-      if (const YAML::Node b = s["bias"]) e.bias = r.vector<6>(b, key + ".bias");
+    std::array<core::Vector6d, 2> bias{{t.ft[0].bias, t.ft[1].bias}};
+    std::array<double, 2> scale{{t.ft[0].scale, t.ft[1].scale}};
+    core::parseForceSensors(f, r, bias, scale);
+    for (std::size_t i = 0; i < 2; ++i) {
+      t.ft[i].bias = bias[i];
+      t.ft[i].scale = scale[i];
     }
   }
   return t;

@@ -1,6 +1,7 @@
 // `overstep identify`: a replay's log + its plan -> residual -> candidate effect -> parameters.
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -11,6 +12,7 @@
 #include "overstep/core/plan.hpp"
 #include "overstep/monitor/lcm_log.hpp"
 #include "overstep/monitor/messages.hpp"
+#include "overstep/monitor/report.hpp"
 #include "overstep/msgs/convert.hpp"
 #include "overstep/robots/whole_body_model.hpp"
 #include "overstep/sysid/identify.hpp"
@@ -20,7 +22,7 @@ namespace overstep {
 namespace {
 
 struct IdentifyCliOptions {
-  std::string log, plan, robot, residuals, out;
+  std::string log, plan, robot, residuals, out, plots, python = "/usr/bin/python3";
   bool json = false, no_torque = false, no_ground = false;
   double train = 0.6;
 };
@@ -132,6 +134,25 @@ int runIdentify(const IdentifyCliOptions& o) {
                      {"f_statistic", c.f_statistic},
                      {"plausible", c.plausible}});
   j["candidates"] = cands;
+  if (!o.plots.empty()) {
+    // Every residual row and the summary, then the figures (Matplotlib).
+    std::error_code ec;
+    std::filesystem::create_directories(o.plots, ec);
+    if (ec) throw InputError("--plots: cannot create " + o.plots + ": " + ec.message());
+    std::string csv = "channel,label,t,held_out,before,after\n";
+    char buf[160];
+    for (const auto& row : r.residuals) {
+      std::snprintf(buf, sizeof buf, ",%.6f,%d,%.9g,%.9g\n", row.t, row.held_out ? 1 : 0,
+                    row.before, row.after);
+      csv += row.channel + "," + row.label + buf;
+    }
+    const std::filesystem::path dir(o.plots);
+    core::writeFileAtomic((dir / "residuals.csv").string(), csv);
+    core::writeFileAtomic((dir / "summary.json").string(), j.dump(2) + "\n");
+    monitor::runPlotScript(o.python, monitor::shippedScript("sysid/python/residual_plots.py"),
+                           {o.plots}, "identify --plots");
+    j["plots"] = {(dir / "fig_residuals.png").string(), (dir / "fig_autocorr.png").string()};
+  }
   if (o.json) {
     std::cout << j.dump(2) << "\n";
   } else {
@@ -155,6 +176,9 @@ int runIdentify(const IdentifyCliOptions& o) {
                   c.plausible ? "" : "  (implausible)");
     if (!overlay_written.empty())
       std::printf("model overlay: %s (use it as --robot)\n", overlay_written.c_str());
+    if (!o.plots.empty())
+      std::printf("figures: %s/fig_residuals.png, %s/fig_autocorr.png\n", o.plots.c_str(),
+                  o.plots.c_str());
   }
   return kExitOk;
 }
@@ -176,6 +200,11 @@ void registerIdentifyCommand(CLI::App& app, cli::Registry& registry) {
                 "Leave the ground channels (ankle sensors' summed force and moment) out");
   sub->add_option("--out", o->out,
                   "Write the identified effect as a model overlay YAML (use it as --robot)");
+  sub->add_option("--plots", o->plots,
+                  "Folder for the residual before/after and its autocorrelation (PNG, "
+                  "Matplotlib) with residuals.csv");
+  sub->add_option("--python", o->python, "Python with Matplotlib (for --plots)")
+      ->capture_default_str();
   sub->add_option("--residuals", o->residuals,
                   "Write every residual row (channel, joint, t, residual, measured) to this CSV");
   sub->add_flag("--json", o->json,

@@ -667,6 +667,20 @@ Identification identify(const Dataset& data, const core::Plan& plan,
   }
   if (out.candidates.size() > 1) out.runner_up = out.candidates[1].name;
   out.error_after = rms(final_resid, eval);
+  out.residuals.reserve(static_cast<std::size_t>(R));
+  for (int i = 0; i < R; ++i) {
+    const Row& w = rows[static_cast<std::size_t>(i)];
+    ResidualRow row;
+    row.channel = kChannelName[w.channel];
+    row.label = w.channel >= 3 ? std::string(w.joint == 0 ? "x" : "y")
+                : w.joint >= 0 ? d.actuated[static_cast<std::size_t>(w.joint)].name
+                               : std::string();
+    row.t = data.records[static_cast<std::size_t>(w.record)].plan_t;
+    row.held_out = w.record >= split;
+    row.before = res(i);
+    row.after = final_resid(i) / wgt(i);
+    out.residuals.push_back(row);
+  }
   for (int ch = 0; ch < kChannels; ++ch) {
     std::vector<int> idx;
     for (int i : test)

@@ -51,6 +51,27 @@ TEST_F(IdentifyCli, FindsAnUndeclaredCommandDelayInARecordedRun) {
     EXPECT_TRUE(std::abs(delay - 0.02) <= std::max(ci, 0.15 * 0.02)) << delay << " +- " << ci;
   }
   EXPECT_LT(j["error_after"].get<double>(), 0.3 * j["error_before"].get<double>());
+
+  // The identified delay as a model overlay that every command loads as its robot, and the
+  // residual figures.
+  const std::string overlay = dir.file("identified.yaml");
+  const auto o =
+      test::runOverstep("identify " + log + " --plan " + dir.file("excite.json") + " --out " +
+                        overlay + " --plots " + dir.file("plots") + " --json");
+  ASSERT_EQ(o.code, 0) << o.err;
+  const json oj = json::parse(o.out);
+  EXPECT_EQ(oj["overlay"], overlay);
+  const std::string text = test::slurp(overlay);
+  EXPECT_NE(text.find("base: "), std::string::npos) << text;
+  EXPECT_NE(text.find("command: {delay: "), std::string::npos) << text;
+  const auto m = test::runOverstep("model --robot " + overlay + " --json");
+  EXPECT_EQ(m.code, 0) << m.err;
+  for (const char* f : {"fig_residuals.png", "fig_autocorr.png", "residuals.csv"})
+    EXPECT_GT(std::filesystem::file_size(dir.path() / "plots" / f), 1000u) << f;
+  // A plan for the base model is refused with the overlay (another robot: re-plan).
+  const auto refused = test::runOverstep("identify " + log + " --plan " + dir.file("excite.json") +
+                                         " --robot " + overlay);
+  EXPECT_EQ(refused.code, 2) << refused.err;
 }
 
 TEST_F(IdentifyCli, BadInputIsExitTwoWithOneLine) {

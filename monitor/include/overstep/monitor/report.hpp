@@ -37,6 +37,13 @@ struct ReportSummary {
 /// robot; std::runtime_error when the plotting script fails.
 ReportSummary makeReport(const ReportOptions& options);
 
+/// Runs `python script args...` and waits; std::runtime_error naming `what` when it cannot start
+/// or fails (the figures of `overstep report` and `overstep identify --plots`).
+void runPlotScript(const std::string& python, const std::string& script,
+                   const std::vector<std::string>& args, const std::string& what);
+/// A Python script shipped in this source tree (e.g. "sysid/python/residual_plots.py").
+std::string shippedScript(const std::string& relative);
+
 /// Only the data files (no Python): what makeReport() feeds the script. Returns the tick count.
 int writeReportData(const ReportOptions& options, ReportSummary& summary);
 

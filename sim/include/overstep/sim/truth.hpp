@@ -9,16 +9,14 @@
 #include <string>
 #include <vector>
 
+#include "overstep/core/robot_description.hpp"
 #include "overstep/core/wrench.hpp"
 #include "overstep/robots/whole_body_model.hpp"
 
 namespace overstep::sim {
 
-struct Payload {
-  std::string link;
-  double mass = 0.0;                                 ///< kg
-  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  ///< m, in the link frame
-};
+/// A point mass on a link (kg; offset m in the link frame), as in model overlays.
+using Payload = core::PayloadDescription;
 
 struct FtSensorEffect {
   core::Vector6d bias = core::Vector6d::Zero();  ///< [F; M] in the sensor frame, N and N m

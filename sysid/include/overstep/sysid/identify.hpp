@@ -54,6 +54,14 @@ struct ChannelError {
   double noise = 0.0;                        ///< estimated noise level, physical units
 };
 
+/// One residual row in physical units: before (the model as it is) and after the chosen effect.
+struct ResidualRow {
+  std::string channel, label;  ///< e.g. "joint_position", "RARM_JOINT0"; "ground_moment", "x"
+  double t = 0.0;              ///< plan time, s (a window's start for the windowed channels)
+  bool held_out = false;
+  double before = 0.0, after = 0.0;
+};
+
 struct Identification {
   std::string verdict;                  ///< identified, ambiguous, none, unexplained
   std::string effect;                   ///< the winning candidate ("" for none / unexplained)
@@ -64,6 +72,7 @@ struct Identification {
   double whiteness = 0.0;  ///< lag-1 autocorrelation of the held-out residual before
   std::map<std::string, ChannelError> channels;
   std::vector<CandidateFit> candidates;  ///< best first
+  std::vector<ResidualRow> residuals;    ///< every row (for plots and --residuals)
   int samples = 0, moving_joints = 0;
 };
 
