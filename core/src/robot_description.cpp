@@ -129,6 +129,18 @@ RobotDescription loadOverlay(const std::string& yaml_path, const std::string& te
       }
     }
   }
+  if (const YAML::Node b = root["backlash"]) {
+    if (!b.IsSequence()) r.fail("backlash", "expected a list of {joints, width}");
+    e.backlash.setZero(static_cast<Eigen::Index>(d.actuated.size()));
+    for (std::size_t k = 0; k < b.size(); ++k) {
+      const std::string key = "backlash[" + std::to_string(k) + "]";
+      r.onlyKeys(b[k], key, {"joints", "width"});
+      if (!b[k]["joints"] || !b[k]["width"]) r.fail(key, "needs 'joints' and 'width' (rad)");
+      const double w = r.valueAtLeast(b[k]["width"], key + ".width", 0.0);
+      if (w > 0.1) r.fail(key + ".width", "expected <= 0.1 rad");
+      for (int j : jointList(b[k]["joints"], key + ".joints", r, d)) e.backlash(j) = w;
+    }
+  }
   if (const YAML::Node p = root["payload"]) {
     const auto more = parsePayloads(p, r);
     e.payloads.insert(e.payloads.end(), more.begin(), more.end());

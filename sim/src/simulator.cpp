@@ -131,6 +131,18 @@ Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& tr
   s.robot->setPositions(s.model.skeleton()->getPositions());
   s.robot->setVelocities(Eigen::VectorXd::Zero(s.robot->getNumDofs()));
 
+  // Bent links: the joint carrying the link sits rotated on its parent.
+  for (const auto& b : truth.bends) {
+    dd::BodyNode* bn = s.robot->getBodyNode(b.link);
+    if (!bn || !bn->getParentJoint())
+      throw InputError("sim: bend link '" + b.link + "' is not a body with a parent joint");
+    dd::Joint* jt = bn->getParentJoint();
+    Eigen::Isometry3d T = jt->getTransformFromParentBodyNode();
+    if (b.rotation.norm() > 0.0)
+      T.linear() = T.linear() *
+                   Eigen::AngleAxisd(b.rotation.norm(), b.rotation.normalized()).toRotationMatrix();
+    jt->setTransformFromParentBodyNode(T);
+  }
   // Payloads: mass and inertia merged into the link (point masses at an offset).
   for (const auto& p : truth.payloads)
     robots::WholeBodyModel::attachPointMass(*s.robot, p.link, p.mass, p.offset);

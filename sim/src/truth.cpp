@@ -50,7 +50,7 @@ std::vector<int> jointsOf(const YAML::Node& n, const std::string& key, const Rea
 bool TruthEffects::none() const {
   return !elastic_changed && viscous.isZero() && coulomb.isZero() && backlash.isZero() &&
          payloads.empty() && command_delay == 0.0 && command_lag == 0.0 && ft[0].bias.isZero() &&
-         ft[1].bias.isZero() && ft[0].scale == 1.0 && ft[1].scale == 1.0;
+         ft[1].bias.isZero() && ft[0].scale == 1.0 && ft[1].scale == 1.0 && bends.empty();
 }
 
 std::string TruthEffects::describe() const {
@@ -64,6 +64,8 @@ std::string TruthEffects::describe() const {
   if (!backlash.isZero()) s << "backlash: max " << backlash.maxCoeff() << " rad\n";
   for (const auto& p : payloads)
     s << "payload: " << p.mass << " kg on " << p.link << " at [" << p.offset.transpose() << "] m\n";
+  for (const auto& b : bends)
+    s << "bend: " << b.link << " rotated by [" << b.rotation.transpose() << "] rad\n";
   if (command_delay > 0.0 || command_lag > 0.0)
     s << "command: delay " << command_delay << " s, lag " << command_lag << " s\n";
   for (int f = 0; f < 2; ++f)
@@ -94,7 +96,22 @@ TruthEffects loadTruth(const std::string& path, const robots::WholeBodyModel& mo
   TruthEffects t = noTruthEffects(model);
   if (root.IsNull()) return t;
   const auto& d = model.description();
-  r.onlyKeys(root, "", {"ankle", "friction", "payload", "command", "ft_sensor", "backlash"});
+  r.onlyKeys(root, "",
+             {"ankle", "friction", "payload", "command", "ft_sensor", "backlash", "bend"});
+  if (const YAML::Node b = root["bend"]) {
+    if (!b.IsSequence()) r.fail("bend", "expected a list of {link, rotation}");
+    for (std::size_t k = 0; k < b.size(); ++k) {
+      const std::string key = "bend[" + std::to_string(k) + "]";
+      r.onlyKeys(b[k], key, {"link", "rotation"});
+      if (!b[k]["link"] || !b[k]["rotation"]) r.fail(key, "needs 'link' and 'rotation' (rad)");
+      Bend bend;
+      bend.link = r.as<std::string>(b[k]["link"], key + ".link");
+      if (!model.hasFrame(bend.link)) r.fail(key + ".link", "unknown link '" + bend.link + "'");
+      bend.rotation = r.vector<3>(b[k]["rotation"], key + ".rotation");
+      if (bend.rotation.norm() > 0.2) r.fail(key + ".rotation", "expected |rotation| <= 0.2 rad");
+      t.bends.push_back(bend);
+    }
+  }
 
   if (const YAML::Node a = root["ankle"]) {
     core::parseAnkles(a, r, d, t.elastic_stiffness, t.elastic_damping);

@@ -54,10 +54,17 @@ double lag1(const Eigen::VectorXd& x, const std::vector<Row>& rows, const std::v
 }
 
 struct Candidate {
+  Candidate() = default;
+  Candidate(std::string n, std::vector<std::string> p, Eigen::MatrixXd x, std::vector<int> nn)
+      : name(std::move(n)), params(std::move(p)), X(std::move(x)), nonneg(std::move(nn)) {}
   std::string name;
   std::vector<std::string> params;
   Eigen::MatrixXd X;        // rows x params, physical units
   std::vector<int> nonneg;  // parameters that must be >= 0 to be physical
+  // A nonlinear parameter found by a scan on the training rows (X is built at its best value):
+  // name, value and the half-width of its interval.
+  std::string scanned;
+  double scanned_value = 0.0, scanned_ci = 0.0;
 };
 
 }  // namespace
@@ -124,6 +131,7 @@ Identification identify(const Dataset& data, const core::Plan& plan,
   Eigen::VectorXd res(R);
   // Per record: inverse-dynamics torques of the measured motion, payload torque regressors.
   std::vector<Eigen::VectorXd> tau_id(static_cast<std::size_t>(N));
+
   std::vector<Eigen::MatrixXd> pay(static_cast<std::size_t>(N));  // nA x 4
   const Eigen::Vector3d gvec(0.0, 0.0, d.gravity);
   const int imu_frame = model.frameIndex("imu");
@@ -207,6 +215,7 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     model.setState(q, v, a);
     const Eigen::VectorXd tau_full = model.inverseDynamics();
     tau_id[static_cast<std::size_t>(k)] = tau_full.segment(6, nA);
+
     if (o.use_force) {
       Ground& gr = ground[static_cast<std::size_t>(k)];
       const Eigen::Vector3d P =
@@ -444,6 +453,91 @@ Identification identify(const Dataset& data, const core::Plan& plan,
   });
   cands.push_back({"command_delay", {"delay"}, shift, {0}});
   cands.push_back({"command_lag", {"lag"}, shift, {0}});
+  // Backlash: a dead band b between the motor (which the encoders read) and the load. After each
+  // reversal of a joint's command the load waits until the motor has travelled b, and the servo's
+  // velocity feed-forward is lost meanwhile: the encoder falls behind the prediction by a fraction
+  // of the commanded velocity (measured on the simulator: a ramp of about -0.6 ms x qd_ref over
+  // each crossing, then nothing). The band depends on b nonlinearly: b is scanned (1-80 mrad,
+  // geometric) on the training rows; per moving joint a gain (s, >= 0) is fitted linearly.
+  if (!moving.empty()) {
+    const auto jointCount = static_cast<Eigen::Index>(moving.size());
+    // The load follows a play operator on the motor (the command): L = clamp(L, m - h, m + h),
+    // h = width / 2, starting centred. Inside the band (L held while the motor moves) the
+    // position rows lose the feed-forward: one column per joint (a gain). (The motor torques'
+    // part, the load's catch-up at the end of each crossing, is not modelled: an encoder-offset
+    // column -dtau/dq x (m - L) explained 0.3 % of it; docs/identification.md.)
+    auto bandRegressor = [&](double width) {
+      const double h = 0.5 * width;
+      Eigen::MatrixXd X = Eigen::MatrixXd::Zero(R, jointCount);
+      std::vector<std::vector<char>> in_band(static_cast<std::size_t>(jointCount),
+                                             std::vector<char>(static_cast<std::size_t>(N), 0));
+      for (Eigen::Index m = 0; m < jointCount; ++m) {
+        const int j = moving[static_cast<std::size_t>(m)];
+        double L = data.records[0].q_ref(j);
+        for (int k = 0; k < N; ++k) {
+          const Record& rec = data.records[static_cast<std::size_t>(k)];
+          const double motor = rec.q_ref(j), before = L;
+          L = std::clamp(L, motor - h, motor + h);
+          in_band[static_cast<std::size_t>(m)][static_cast<std::size_t>(k)] =
+              L == before && std::abs(rec.qd_ref(j)) > 1e-6;
+        }
+      }
+      for (int i = 0; i < R; ++i) {
+        const Row& w = rows[static_cast<std::size_t>(i)];
+        if (w.channel != 0) continue;
+        const auto it = std::find(moving.begin(), moving.end(), w.joint);
+        const auto m = static_cast<Eigen::Index>(it - moving.begin());
+        if (in_band[static_cast<std::size_t>(m)][static_cast<std::size_t>(w.record)])
+          X(i, m) = -recordOf(w).qd_ref(w.joint);
+      }
+      return X;
+    };
+    const int split_rec = static_cast<int>(o.train_fraction * N);
+    std::vector<double> widths, rss;
+    for (double b = 0.001; b < 0.081; b *= 1.15) {
+      const Eigen::MatrixXd X = bandRegressor(b);
+      std::vector<int> tr;
+      for (int i = 0; i < R; ++i)
+        if (rows[static_cast<std::size_t>(i)].record < split_rec) tr.push_back(i);
+      Eigen::MatrixXd A(static_cast<Eigen::Index>(tr.size()), jointCount);
+      Eigen::VectorXd y(static_cast<Eigen::Index>(tr.size()));
+      for (std::size_t i = 0; i < tr.size(); ++i) {
+        const double wt = 1.0 / sigma[rows[static_cast<std::size_t>(tr[i])].channel];
+        A.row(static_cast<Eigen::Index>(i)) = X.row(tr[i]) * wt;
+        y(static_cast<Eigen::Index>(i)) = res(tr[i]) * wt;
+      }
+      const Eigen::VectorXd th = A.colPivHouseholderQr().solve(y);
+      widths.push_back(b);
+      rss.push_back((y - A * th).squaredNorm());
+    }
+    const auto best =
+        static_cast<std::size_t>(std::min_element(rss.begin(), rss.end()) - rss.begin());
+    // Interval: the widths whose training residual is within a chi-square(1) 95 % step of the
+    // best (residual variance from the best fit; the F statistic's correlation correction is
+    // not applied here, so the interval is on the narrow side).
+    const double n_tr = static_cast<double>(split_rec) * static_cast<double>(moving.size());
+    const double s2 = rss[best] / std::max(n_tr, 1.0);
+    double lo = widths[best], hi = widths[best];
+    for (std::size_t i = 0; i < widths.size(); ++i)
+      if (rss[i] - rss[best] <= 3.84 * s2) {
+        lo = std::min(lo, widths[i]);
+        hi = std::max(hi, widths[i]);
+      }
+    Candidate c;
+    c.name = "backlash";
+    c.X = bandRegressor(widths[best]);
+    for (Eigen::Index m = 0; m < jointCount; ++m) {
+      c.params.push_back(
+          "gain[" + d.actuated[static_cast<std::size_t>(moving[static_cast<std::size_t>(m)])].name +
+          "]");
+      c.nonneg.push_back(static_cast<int>(m));
+    }
+
+    c.scanned = "width";
+    c.scanned_value = widths[best];
+    c.scanned_ci = std::max(0.5 * (hi - lo), 0.5 * widths[best] * (1.15 - 1.0));
+    cands.push_back(std::move(c));
+  }
   // Joint friction per moving joint: the motor torque carries it, and the position loop lags by
   // friction / stiffness.
   for (int kind = 0; kind < 2; ++kind) {
@@ -607,6 +701,11 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     // A payload sits on the link: mass positive, offset within half a metre.
     if (c.name == "payload" && (theta(0) <= 0.0 || theta.tail(3).norm() > 0.5 * theta(0)))
       fit.plausible = false;
+    if (!c.scanned.empty()) {
+      fit.parameter_names.push_back(c.scanned);
+      fit.parameters.push_back(c.scanned_value);
+      fit.ci95.push_back(c.scanned_ci);
+    }
     for (int i : test) fit.held_out_rss += after(i) * after(i);
     design.push_back(A);
     fitted_train.push_back(A * theta);

@@ -90,6 +90,17 @@ std::string overlayYaml(const Identification& r, const core::RobotDescription& d
     y << "ft_sensor:\n  " << (left ? "left" : "right") << ": {bias: [";
     for (int i = 0; i < 6; ++i) y << (i ? ", " : "") << num(bias(i));
     y << "], scale: " << num(scale) << "}\n";
+  } else if (r.effect == "backlash") {
+    // One width for the joints whose gain is significant (recorded: no model uses it yet).
+    y << "backlash:\n";
+    const double width = param(r, "width");
+    for (const auto& [name, v] : r.parameters) {
+      if (name.rfind("gain[", 0) != 0) continue;
+      const auto ci = r.ci95.find(name);
+      if (v > (ci == r.ci95.end() ? 0.0 : ci->second))
+        y << "  - {joints: " << name.substr(5, name.size() - 6) << ", width: " << num(width)
+          << "}\n";
+    }
   } else if (r.effect == "ankle_stiffness") {
     // Compliance changes of the roll and pitch bushings (both feet), on the model's stiffness.
     y << "ankle:\n";

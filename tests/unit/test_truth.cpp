@@ -51,8 +51,13 @@ payload:
 command: {delay: 0.01, lag: 0.02}
 ft_sensor:
   left: {bias: [1, 2, 3, 0.1, 0.2, 0.3], scale: 1.05}
+bend:
+  - {link: RARM_LINK3, rotation: [0.0, 0.05, 0.0]}
 )");
   EXPECT_FALSE(t.none());
+  ASSERT_EQ(t.bends.size(), 1u);
+  EXPECT_EQ(t.bends[0].link, "RARM_LINK3");
+  EXPECT_DOUBLE_EQ(t.bends[0].rotation.y(), 0.05);
   const auto& d = model().description();
   EXPECT_DOUBLE_EQ(
       t.elastic_stiffness[static_cast<std::size_t>(d.elasticIndex("RLEG_ELASTIC_PITCH"))], 400.0);
@@ -106,6 +111,11 @@ TEST(Truth, BadInputIsRefusedWithTheKeyNamed) {
             std::string::npos);
   EXPECT_NE(error("ft_sensor:\n  right: {bias: [1, 2]}\n").find("bias"), std::string::npos);
   EXPECT_NE(error("gravity: 3\n").find("gravity: unknown key"), std::string::npos);
+  EXPECT_NE(error("bend:\n  - {link: NOPE, rotation: [0, 0, 0.1]}\n").find("bend[0].link"),
+            std::string::npos);
+  EXPECT_NE(
+      error("bend:\n  - {link: RARM_LINK3, rotation: [0, 0, 0.5]}\n").find("bend[0].rotation"),
+      std::string::npos);
   EXPECT_NE(error("ankle: [1, 2\n").find("malformed YAML"), std::string::npos);
   EXPECT_THROW(overstep::sim::loadTruth("/nonexistent/truth.yaml", model()), overstep::InputError);
 }

@@ -90,6 +90,7 @@ struct PayloadDescription {
 struct ModelEffects {
   std::vector<PayloadDescription> payloads;  ///< merged into their links' inertia by robots/
   Eigen::VectorXd viscous, coulomb;  ///< per actuated joint, N m s/rad and N m (size 0: none)
+  Eigen::VectorXd backlash;          ///< per actuated joint, dead band width in rad (size 0: none)
   double command_delay = 0.0;        ///< s, from a command to its effect at the joints
   double command_lag = 0.0;          ///< s, first-order lag of the joint servos
   /// Force sensors (right, left): measured = scale * true + bias ([F; M], sensor frame).
@@ -98,7 +99,8 @@ struct ModelEffects {
   std::array<double, 2> ft_scale{{1.0, 1.0}};
   bool empty() const {
     return payloads.empty() && (viscous.size() == 0 || viscous.isZero()) &&
-           (coulomb.size() == 0 || coulomb.isZero()) && command_delay == 0.0 &&
+           (coulomb.size() == 0 || coulomb.isZero()) &&
+           (backlash.size() == 0 || backlash.isZero()) && command_delay == 0.0 &&
            command_lag == 0.0 && ft_bias[0].isZero() && ft_bias[1].isZero() && ft_scale[0] == 1.0 &&
            ft_scale[1] == 1.0;
   }

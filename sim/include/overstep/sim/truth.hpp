@@ -23,6 +23,13 @@ struct FtSensorEffect {
   double scale = 1.0;                            ///< measured = scale * true + bias
 };
 
+/// A bent link: the joint that carries `link` sits rotated on its parent by `rotation`
+/// (rotation vector, rad): a kinematic error no identification candidate models.
+struct Bend {
+  std::string link;
+  Eigen::Vector3d rotation = Eigen::Vector3d::Zero();
+};
+
 struct TruthEffects {
   /// Per elastic joint (model order): stiffness and damping actually simulated.
   std::vector<double> elastic_stiffness;  ///< N m/rad
@@ -36,6 +43,7 @@ struct TruthEffects {
   double command_delay = 0.0;          ///< s, pure delay of every command
   double command_lag = 0.0;            ///< s, first-order lag time constant of the servo references
   std::array<FtSensorEffect, 2> ft{};  ///< [right, left]
+  std::vector<Bend> bends;
 
   /// True when nothing differs from the model.
   bool none() const;
