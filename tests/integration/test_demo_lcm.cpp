@@ -61,8 +61,9 @@ TEST_F(DemoLcm, SmallObstacleRunWritesAConsistentVerdict) {
 }
 
 TEST_F(DemoLcm, BadInputIsExitTwo) {
-  for (const char* args : {"demo --obstacle-height -1", "demo --robot /nonexistent.yaml",
-                           "demo --truth /nonexistent.yaml", "demo --timeout 0"}) {
+  for (const char* args :
+       {"demo --obstacle-height -1", "demo --robot /nonexistent.yaml",
+        "demo --truth /nonexistent.yaml", "demo --timeout 0", "demo --identify --plan plan.json"}) {
     const auto r = test::runOverstep(args);
     EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
   }
