@@ -152,6 +152,9 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     /// d(torso roll, pitch) / d(compliance of the roll and pitch bushings): the moments they
     /// carry through the kinematics (columns: roll compliance, pitch compliance).
     Eigen::Matrix2d torso_dc = Eigen::Matrix2d::Zero();
+    /// The same for a change of the bushings' damping (columns: roll, pitch): the damper takes
+    /// delta' x more of the moment, delta' from the predicted deflection's rate.
+    Eigen::Matrix2d torso_dd = Eigen::Matrix2d::Zero();
     /// The same for each foot's sensor: its scale (col. 0, per unit of scale - 1) and its tilting
     /// moment biases (col. 1 Mx, col. 2 My): they change the moments the prediction uses.
     Eigen::Matrix<double, 2, 3> torso_ft[2] = {Eigen::Matrix<double, 2, 3>::Zero(),
@@ -252,7 +255,7 @@ Identification identify(const Dataset& data, const core::Plan& plan,
         // The spring carries the moment less the damper's share: k delta + c delta' = M, i.e.
         // k delta is M through a first-order low-pass of time constant c / k (exact per period).
         // (The static k delta = M left 0.85 mrad RMS of pitch residual on clean data, ~ c delta'.)
-        double moment[4];
+        double moment[4], rate[4];
         for (int f = 0; f < 2; ++f) {
           const Eigen::Matrix<double, 6, 1> ft = d.effects.calibrated(f, r.ft[f]);
           const double m_axis[2] = {ft(3), ft(4)};  // about the sensor's x (roll), y (pitch)
@@ -261,8 +264,11 @@ Identification identify(const Dataset& data, const core::Plan& plan,
             const auto& ej = d.elastic[static_cast<std::size_t>(e)];
             const double keep =
                 ej.damping > 0.0 ? std::exp(-ej.stiffness * data.period / ej.damping) : 0.0;
+            const double previous = spring[e];
             spring[e] = k == 1 ? m_axis[ax] : keep * spring[e] + (1.0 - keep) * m_axis[ax];
             moment[e] = spring[e];
+            // Deflection rate (rad/s) of the predicted bushing angle.
+            rate[e] = k == 1 ? 0.0 : (spring[e] - previous) / (ej.stiffness * data.period);
           }
         }
         const auto& phs = plan.phases[static_cast<std::size_t>(plan.phase(s))];
@@ -300,6 +306,7 @@ Identification identify(const Dataset& data, const core::Plan& plan,
           const Eigen::Vector2d de = (predict(dd) - gr.torso_pred) / h;  // d tilt / d deflection
           const double k_e = d.elastic[static_cast<std::size_t>(e)].stiffness;
           gr.torso_dc.col(e % 2) += de * kBushingSign * moment[e];
+          gr.torso_dd.col(e % 2) -= de * kBushingSign * rate[e] / k_e;
           gr.torso_ft[e / 2].col(0) -= de * kBushingSign * moment[e] / k_e;
           gr.torso_ft[e / 2].col(1 + e % 2) -= de * kBushingSign / k_e;
         }
@@ -338,6 +345,7 @@ Identification identify(const Dataset& data, const core::Plan& plan,
         a.torso_meas += b.torso_meas;
         a.torso_pred += b.torso_pred;
         a.torso_dc += b.torso_dc;
+        a.torso_dd += b.torso_dd;
         a.torso_ft[0] += b.torso_ft[0];
         a.torso_ft[1] += b.torso_ft[1];
         for (int f = 0; f < 2; ++f) {
@@ -356,6 +364,7 @@ Identification identify(const Dataset& data, const core::Plan& plan,
       a.torso_meas *= inv;
       a.torso_pred *= inv;
       a.torso_dc *= inv;
+      a.torso_dd *= inv;
       a.torso_ft[0] *= inv;
       a.torso_ft[1] *= inv;
       for (int f = 0; f < 2; ++f) {
@@ -581,17 +590,19 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     }
     cands.push_back(std::move(c));
   }
-  // Ankle bushing stiffness: a change of compliance (1/k) of the roll and of the pitch bushings
-  // (both feet) tilts the torso by the moments they carry.
+  // Ankle bushings: a change of compliance (1/k) and of damping of the roll and of the pitch
+  // bushings (both feet) tilts the torso by the moments they carry and their rate.
   {
-    Candidate c{"ankle_stiffness",
-                {"compliance_roll", "compliance_pitch"},
-                Eigen::MatrixXd::Zero(R, 2),
+    Candidate c{"ankle_bushing",
+                {"compliance_roll", "compliance_pitch", "damping_roll", "damping_pitch"},
+                Eigen::MatrixXd::Zero(R, 4),
                 {}};
     for (int i = 0; i < R; ++i) {
       const Row& w = rows[static_cast<std::size_t>(i)];
-      if (w.channel == 4)
-        c.X.row(i) = ground[static_cast<std::size_t>(w.record)].torso_dc.row(w.joint);
+      if (w.channel != 4) continue;
+      const Ground& gr = ground[static_cast<std::size_t>(w.record)];
+      c.X.block<1, 2>(i, 0) = gr.torso_dc.row(w.joint);
+      c.X.block<1, 2>(i, 2) = gr.torso_dd.row(w.joint);
     }
     cands.push_back(std::move(c));
   }

@@ -101,16 +101,17 @@ std::string overlayYaml(const Identification& r, const core::RobotDescription& d
         y << "  - {joints: " << name.substr(5, name.size() - 6) << ", width: " << num(width)
           << "}\n";
     }
-  } else if (r.effect == "ankle_stiffness") {
-    // Compliance changes of the roll and pitch bushings (both feet), on the model's stiffness.
+  } else if (r.effect == "ankle_bushing") {
+    // Compliance and damping changes of the roll and pitch bushings (both feet).
     y << "ankle:\n";
     for (std::size_t i = 0; i < d.elastic.size(); ++i) {
       const auto& ej = d.elastic[i];
-      const double dc = param(r, i % 2 == 0 ? "compliance_roll" : "compliance_pitch");
-      const double c = 1.0 / ej.stiffness + dc;
+      const bool roll = i % 2 == 0;
+      const double c = 1.0 / ej.stiffness + param(r, roll ? "compliance_roll" : "compliance_pitch");
+      const double damping = ej.damping + param(r, roll ? "damping_roll" : "damping_pitch");
       if (!(c > 0.0)) throw InputError("identify: the identified ankle compliance is not positive");
-      y << "  " << ej.name << ": {stiffness: " << num(1.0 / c) << ", damping: " << num(ej.damping)
-        << "}\n";
+      y << "  " << ej.name << ": {stiffness: " << num(1.0 / c)
+        << ", damping: " << num(std::max(damping, 0.0)) << "}\n";
     }
   } else {
     throw InputError("identify: effect '" + r.effect + "' has no model overlay form");

@@ -216,14 +216,31 @@ TEST_F(Identify, AnkleStiffnessIsIdentified) {
     t.elastic_changed = true;
     const auto r = run(t, 29);
     std::printf("ankle stiffness x%g: %s\n", factor, describe(r).c_str());
-    EXPECT_TRUE(names(r, "ankle_stiffness")) << factor << ": " << describe(r);
-    if (!names(r, "ankle_stiffness")) continue;
+    EXPECT_TRUE(names(r, "ankle_bushing")) << factor << ": " << describe(r);
+    if (!names(r, "ankle_bushing")) continue;
     const auto& d = model_->description();
     // Compliance change of the roll (index 0) and pitch (index 1) bushings.
-    expectValue(r, "ankle_stiffness", "compliance_roll",
+    expectValue(r, "ankle_bushing", "compliance_roll",
                 1.0 / (factor * d.elastic[0].stiffness) - 1.0 / d.elastic[0].stiffness);
-    expectValue(r, "ankle_stiffness", "compliance_pitch",
+    expectValue(r, "ankle_bushing", "compliance_pitch",
                 1.0 / (factor * d.elastic[1].stiffness) - 1.0 / d.elastic[1].stiffness);
+    EXPECT_LT(r.error_after, 0.3 * r.error_before) << describe(r);
+  }
+}
+
+// Weaker bushing dampers let the torso tilt lag the ankle moments less.
+TEST_F(Identify, AnkleDampingIsIdentified) {
+  for (double factor : {0.5, 0.25}) {
+    sim::TruthEffects t = sim::noTruthEffects(*model_);
+    for (auto& c : t.elastic_damping) c *= factor;
+    t.elastic_changed = true;
+    const auto r = run(t, 37);
+    std::printf("ankle damping x%g: %s\n", factor, describe(r).c_str());
+    EXPECT_TRUE(names(r, "ankle_bushing")) << factor << ": " << describe(r);
+    if (!names(r, "ankle_bushing")) continue;
+    const auto& d = model_->description();
+    expectValue(r, "ankle_bushing", "damping_roll", (factor - 1.0) * d.elastic[0].damping);
+    expectValue(r, "ankle_bushing", "damping_pitch", (factor - 1.0) * d.elastic[1].damping);
     EXPECT_LT(r.error_after, 0.3 * r.error_before) << describe(r);
   }
 }
