@@ -14,6 +14,7 @@
 
 #include "overstep/core/error.hpp"
 #include "overstep/core/plan.hpp"
+#include "overstep/core/rotation.hpp"
 #include "overstep/monitor/lcm_log.hpp"
 #include "overstep/monitor/messages.hpp"
 #include "overstep/robots/collision.hpp"
@@ -30,10 +31,7 @@ const char* const kLegJoints[12] = {"RLEG_JOINT0", "RLEG_JOINT1", "RLEG_JOINT2",
                                     "RLEG_JOINT4", "RLEG_JOINT5", "LLEG_JOINT0", "LLEG_JOINT1",
                                     "LLEG_JOINT2", "LLEG_JOINT3", "LLEG_JOINT4", "LLEG_JOINT5"};
 
-/// Roll and pitch of a rotation (x-y-z fixed axes: yaw-pitch-roll decomposition).
-Eigen::Vector2d rollPitch(const Eigen::Matrix3d& R) {
-  return {std::atan2(R(2, 1), R(2, 2)), std::asin(std::clamp(-R(2, 0), -1.0, 1.0))};
-}
+using core::rollPitch;
 
 /// One aligned tick.
 struct Row {

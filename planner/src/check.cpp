@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "overstep/core/error.hpp"
+#include "overstep/core/rotation.hpp"
 #include "overstep/core/wrench.hpp"
 #include "overstep/robots/collision.hpp"
 
@@ -202,8 +203,8 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
       trq.add(std::abs(tau(c)) / aj.torque - 1.0, t, aj.name);
     }
     const Eigen::Matrix3d R = model.framePose(base).linear();
-    pel.add(std::abs(std::atan2(R(2, 1), R(2, 2))) - tilt, t, "roll");
-    pel.add(std::abs(std::asin(std::clamp(-R(2, 0), -1.0, 1.0))) - tilt, t, "pitch");
+    pel.add(std::abs(core::rollOf(R)) - tilt, t, "roll");
+    pel.add(std::abs(core::pitchOf(R)) - tilt, t, "pitch");
     if (trace) {
       report.trace_t.push_back(t);
       report.trace_phase.push_back(ph);

@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "overstep/core/error.hpp"
+#include "overstep/core/rotation.hpp"
 #include "overstep/core/wrench.hpp"
 #include "overstep/planner/spline.hpp"
 #include "overstep/robots/collision.hpp"
@@ -38,10 +39,8 @@ inline double smoothMax(const Eigen::VectorXd& v, double rho) {
   return m + std::log((rho * (v.array() - m)).exp().sum()) / rho;
 }
 
-inline double rollOf(const Eigen::Matrix3d& R) { return std::atan2(R(2, 1), R(2, 2)); }
-inline double pitchOf(const Eigen::Matrix3d& R) {
-  return std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
-}
+using core::pitchOf;
+using core::rollOf;
 inline double yawOf(const Eigen::Matrix3d& R) { return std::atan2(R(1, 0), R(0, 0)); }
 
 inline Eigen::Isometry3d placement(double x, double y) {

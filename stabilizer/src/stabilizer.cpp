@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "overstep/core/error.hpp"
+#include "overstep/core/rotation.hpp"
 
 namespace overstep::stabilizer {
 namespace {
@@ -21,8 +22,7 @@ bool finiteQuat(const Eigen::Quaterniond& q) {
 
 /// Roll and pitch (x-y-z fixed-axis convention) of a world orientation.
 Eigen::Vector2d rollPitch(const Eigen::Quaterniond& q) {
-  const Eigen::Matrix3d R = q.normalized().toRotationMatrix();
-  return {std::atan2(R(2, 1), R(2, 2)), std::asin(std::clamp(-R(2, 0), -1.0, 1.0))};
+  return core::rollPitch(q.normalized().toRotationMatrix());
 }
 
 /// C1 ramp 0 -> 1.

@@ -7,6 +7,7 @@
 
 #include "overstep/core/error.hpp"
 #include "overstep/core/plan.hpp"
+#include "overstep/core/rotation.hpp"
 
 namespace overstep::sysid {
 namespace {
@@ -23,8 +24,8 @@ const char* const kChannelName[kChannels] = {"joint_position", "joint_torque", "
                                              "ground_moment", "torso_orientation"};
 const char* const kChannelUnit[kChannels] = {"rad", "N m", "N", "N m", "rad"};
 
-double rollOf(const Eigen::Matrix3d& R) { return std::atan2(R(2, 1), R(2, 2)); }
-double pitchOf(const Eigen::Matrix3d& R) { return std::asin(std::clamp(-R(2, 0), -1.0, 1.0)); }
+using core::pitchOf;
+using core::rollOf;
 /// A channel whose held-out residual exceeds this many noise levels (RMS) shows an effect.
 constexpr double kResidualLevel = 1.5;
 constexpr double kGroundWindow = 0.05;  ///< s, averaging window of a ground-channel row

@@ -35,6 +35,15 @@ class Identify : public ::testing::Test {
     if (std::getenv("OVERSTEP_SYSID_ALL")) o.use_torque = o.use_force = true;
     return sysid::identify(data, *plan_, *model_, o);
   }
+  /// Per actuated joint: `value` on both arms, 0 elsewhere.
+  static Eigen::VectorXd onArms(double value) {
+    const auto& d = model_->description();
+    Eigen::VectorXd v = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(d.actuated.size()));
+    for (std::size_t j = 0; j < d.actuated.size(); ++j)
+      if (d.actuated[j].name.rfind("RARM", 0) == 0 || d.actuated[j].name.rfind("LARM", 0) == 0)
+        v(static_cast<Eigen::Index>(j)) = value;
+    return v;
+  }
   static std::string describe(const sysid::Identification& r) {
     std::string s = r.verdict + " " + r.effect + " (before " + std::to_string(r.error_before) +
                     ", after " + std::to_string(r.error_after) + "); channels:";
@@ -107,10 +116,7 @@ TEST_F(Identify, CommandDelayAndLagAreTheDocumentedPair) {
 TEST_F(Identify, BacklashIsIdentified) {
   for (double width : {0.02, 0.04}) {
     sim::TruthEffects t = sim::noTruthEffects(*model_);
-    const auto& d = model_->description();
-    for (std::size_t j = 0; j < d.actuated.size(); ++j)
-      if (d.actuated[j].name.rfind("RARM", 0) == 0 || d.actuated[j].name.rfind("LARM", 0) == 0)
-        t.backlash(static_cast<Eigen::Index>(j)) = width;
+    t.backlash = onArms(width);
     const auto r = run(t, 19);
     std::printf("backlash %g: %s\n", width, describe(r).c_str());
     EXPECT_TRUE(names(r, "backlash")) << width << ": " << describe(r);
@@ -162,10 +168,7 @@ TEST_F(Identify, PayloadOnTheChestIsIdentified) {
 TEST_F(Identify, ArmFrictionIsIdentified) {
   for (double fv : {3.0, 6.0}) {
     sim::TruthEffects t = sim::noTruthEffects(*model_);
-    const auto& d = model_->description();
-    for (std::size_t j = 0; j < d.actuated.size(); ++j)
-      if (d.actuated[j].name.rfind("RARM", 0) == 0 || d.actuated[j].name.rfind("LARM", 0) == 0)
-        t.viscous(static_cast<Eigen::Index>(j)) = fv;
+    t.viscous = onArms(fv);
     const auto r = run(t, 13);
     std::printf("friction %g: %s\n", fv, describe(r).c_str());
     EXPECT_TRUE(names(r, "joint_viscous_friction")) << fv << ": " << describe(r);
@@ -178,10 +181,7 @@ TEST_F(Identify, ArmFrictionIsIdentified) {
 TEST_F(Identify, ArmCoulombFrictionIsIdentified) {
   for (double fc : {2.0, 4.0}) {
     sim::TruthEffects t = sim::noTruthEffects(*model_);
-    const auto& d = model_->description();
-    for (std::size_t j = 0; j < d.actuated.size(); ++j)
-      if (d.actuated[j].name.rfind("RARM", 0) == 0 || d.actuated[j].name.rfind("LARM", 0) == 0)
-        t.coulomb(static_cast<Eigen::Index>(j)) = fc;
+    t.coulomb = onArms(fc);
     const auto r = run(t, 31);
     std::printf("coulomb %g: %s\n", fc, describe(r).c_str());
     EXPECT_TRUE(names(r, "joint_coulomb_friction")) << fc << ": " << describe(r);
