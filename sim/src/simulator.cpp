@@ -85,6 +85,7 @@ struct Simulator::Impl {
   std::deque<std::pair<double, std::pair<Eigen::VectorXd, Eigen::VectorXd>>> pending;  // delay
   Eigen::VectorXd q_cmd, qd_cmd;  // newest command released by the delay line
   double t_cmd = 0.0;             // when it was released
+  Eigen::VectorXd stick;          // where Coulomb friction holds the servo target (play operator)
   Eigen::VectorXd motor;          // motor-side position (what the encoders read)
   Eigen::VectorXd load_target;    // load-side servo target after the backlash dead band
   Eigen::VectorXd friction;       // N m, joint friction torque of the last step
@@ -309,6 +310,7 @@ Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& tr
   s.qd_ref.setZero(na);
   s.q_cmd = s.q_ref;
   s.qd_cmd = s.qd_ref;
+  s.stick = s.q_ref;
   s.motor = s.q_ref;
   s.load_target = s.q_ref;
   s.friction.setZero(na);
@@ -352,15 +354,25 @@ void Simulator::step() {
   for (std::size_t j = 0; j < s.actuated.size(); ++j) {
     dd::Joint* jt = s.actuated[j];
     const auto i = static_cast<Eigen::Index>(j);
-    // Joint friction (truth): the servo's position loop lags by friction / stiffness.
+    // Joint friction (truth). The servo's position loop (stiffness k) lags by friction / k.
+    // Coulomb friction F sticks the joint until the servo's error reaches F / k: a play operator
+    // of half-width F / k on the reference, and the motor torque it costs, k (q_ref - stick),
+    // runs between -F and F (stick-slip). (F tanh(v / 0.01) of the measured velocity fed back
+    // into the target has a loop gain servo_gain F / (k 0.01) = 40 at 4 N m, and left a torque
+    // residual that no friction model fitted; docs/identification.md.)
     const double v = jt->getVelocity(0);
-    s.friction(i) = s.truth.viscous(i) * v + s.truth.coulomb(i) * std::tanh(v / 0.01);
-    s.motor(i) = s.q_ref(i) - s.friction(i) / s.opt.servo_stiffness;
+    const double play = s.truth.coulomb(i) / s.opt.servo_stiffness;
+    const double stuck_at = s.stick(i);
+    s.stick(i) = std::clamp(stuck_at, s.q_ref(i) - play, s.q_ref(i) + play);
+    const bool sticking = play > 0.0 && s.stick(i) == stuck_at;
+    s.friction(i) = s.truth.viscous(i) * v + s.opt.servo_stiffness * (s.q_ref(i) - s.stick(i));
+    s.motor(i) = s.stick(i) - s.truth.viscous(i) * v / s.opt.servo_stiffness;
     // Backlash (truth): the load side follows the motor only beyond half the dead band.
     const double half = 0.5 * s.truth.backlash(i);
     const double before = s.load_target(i);
     s.load_target(i) = std::clamp(before, s.motor(i) - half, s.motor(i) + half);
-    const double ff = half > 0.0 && s.load_target(i) == before ? 0.0 : s.qd_ref(i);
+    const bool in_band = half > 0.0 && s.load_target(i) == before;
+    const double ff = sticking || in_band ? 0.0 : s.qd_ref(i);
     jt->setCommand(0, s.opt.servo_gain * (s.load_target(i) - jt->getPosition(0)) + ff);
   }
   // A foot held flat by the ground (a tenth of the weight, its centre of pressure at least 5 mm

@@ -116,6 +116,8 @@ int runIdentify(const IdentifyCliOptions& o) {
   j["ci95"] = r.ci95;
   j["error_before"] = r.error_before;
   j["error_after"] = r.error_after;
+  j["excess_before"] = r.excess_before;
+  j["excess_after"] = r.excess_after;
   j["whiteness"] = r.whiteness;
   j["samples"] = r.samples;
   j["moving_joints"] = r.moving_joints;
@@ -165,8 +167,10 @@ int runIdentify(const IdentifyCliOptions& o) {
     }
     for (const auto& [name, v] : r.parameters)
       std::printf("  %-28s %12.5g +- %.3g (95 %%)\n", name.c_str(), v, r.ci95.at(name));
-    std::printf("held-out error (noise-normalised RMS): before %.3f, after %.3f\n", r.error_before,
-                r.error_after);
+    std::printf(
+        "held-out error (noise-normalised RMS): before %.3f, after %.3f; above the noise: "
+        "before %.3f, after %.3f\n",
+        r.error_before, r.error_after, r.excess_before, r.excess_after);
     for (const auto& [name, c] : r.channels)
       std::printf("  %-16s RMS %.4g -> %.4g %s (noise %.3g)\n", name.c_str(), c.rms_before,
                   c.rms_after, c.unit.c_str(), c.noise);

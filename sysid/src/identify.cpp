@@ -463,6 +463,48 @@ Identification identify(const Dataset& data, const core::Plan& plan,
   });
   cands.push_back({"command_delay", {"delay"}, shift, {0}});
   cands.push_back({"command_lag", {"lag"}, shift, {0}});
+  // A candidate whose shape depends nonlinearly on one value (a width): the value is scanned on
+  // a geometric grid (15 % steps) over [lo, hi) on the training rows, each column's gain fitted
+  // linearly; the interval holds the values whose training residual is within a chi-square(1)
+  // 95 % step of the best (residual variance from the best fit; the F statistic's correlation
+  // correction is not applied here, so the interval is on the narrow side).
+  const int split_rec = static_cast<int>(o.train_fraction * N);
+  auto scanned = [&](const char* name, const char* value_name, double lo_value, double hi_value,
+                     const auto& regressor) {
+    std::vector<int> tr;
+    for (int i = 0; i < R; ++i)
+      if (rows[static_cast<std::size_t>(i)].record < split_rec) tr.push_back(i);
+    std::vector<double> values, rss;
+    for (double b = lo_value; b < hi_value; b *= 1.15) {
+      const Eigen::MatrixXd X = regressor(b);
+      Eigen::MatrixXd A(static_cast<Eigen::Index>(tr.size()), X.cols());
+      Eigen::VectorXd y(static_cast<Eigen::Index>(tr.size()));
+      for (std::size_t i = 0; i < tr.size(); ++i) {
+        const double wt = 1.0 / sigma[rows[static_cast<std::size_t>(tr[i])].channel];
+        A.row(static_cast<Eigen::Index>(i)) = X.row(tr[i]) * wt;
+        y(static_cast<Eigen::Index>(i)) = res(tr[i]) * wt;
+      }
+      const Eigen::VectorXd th = A.colPivHouseholderQr().solve(y);
+      values.push_back(b);
+      rss.push_back((y - A * th).squaredNorm());
+    }
+    const auto best =
+        static_cast<std::size_t>(std::min_element(rss.begin(), rss.end()) - rss.begin());
+    const double s2 = rss[best] / std::max(static_cast<double>(tr.size()), 1.0);
+    double lo = values[best], hi = values[best];
+    for (std::size_t i = 0; i < values.size(); ++i)
+      if (rss[i] - rss[best] <= 3.84 * s2) {
+        lo = std::min(lo, values[i]);
+        hi = std::max(hi, values[i]);
+      }
+    Candidate c;
+    c.name = name;
+    c.X = regressor(values[best]);
+    c.scanned = value_name;
+    c.scanned_value = values[best];
+    c.scanned_ci = std::max(0.5 * (hi - lo), 0.5 * values[best] * (1.15 - 1.0));
+    return c;
+  };
   // Backlash: a dead band b between the motor (which the encoders read) and the load. After each
   // reversal of a joint's command the load waits until the motor has travelled b, and the servo's
   // velocity feed-forward is lost meanwhile: the encoder falls behind the prediction by a fraction
@@ -473,102 +515,121 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     const auto jointCount = static_cast<Eigen::Index>(moving.size());
     // The load follows a play operator on the motor (the command): L = clamp(L, m - h, m + h),
     // h = width / 2, starting centred. Inside the band (L held while the motor moves) the
-    // position rows lose the feed-forward: one column per joint (a gain). (The motor torques'
-    // part, the load's catch-up at the end of each crossing, is not modelled: an encoder-offset
-    // column -dtau/dq x (m - L) explained 0.3 % of it; docs/identification.md.)
+    // position rows lose the feed-forward: one column per joint (a gain). The motor torques see
+    // the load stop when it enters the band and catch up with the command when it leaves:
+    // velocity steps of -qd_ref and +qd_ref within one period, i.e. torque impulses
+    // I dv / T: a second column per joint (I, an effective inertia, kg m^2).
     auto bandRegressor = [&](double width) {
       const double h = 0.5 * width;
-      Eigen::MatrixXd X = Eigen::MatrixXd::Zero(R, jointCount);
+      Eigen::MatrixXd X = Eigen::MatrixXd::Zero(R, 2 * jointCount);
       std::vector<std::vector<char>> in_band(static_cast<std::size_t>(jointCount),
                                              std::vector<char>(static_cast<std::size_t>(N), 0));
+      std::vector<std::vector<double>> dv(static_cast<std::size_t>(jointCount),
+                                          std::vector<double>(static_cast<std::size_t>(N), 0.0));
       for (Eigen::Index m = 0; m < jointCount; ++m) {
         const int j = moving[static_cast<std::size_t>(m)];
+        const auto mi = static_cast<std::size_t>(m);
         double L = data.records[0].q_ref(j);
         for (int k = 0; k < N; ++k) {
-          const Record& rec = data.records[static_cast<std::size_t>(k)];
+          const auto ki = static_cast<std::size_t>(k);
+          const Record& rec = data.records[ki];
           const double motor = rec.q_ref(j), before = L;
           L = std::clamp(L, motor - h, motor + h);
-          in_band[static_cast<std::size_t>(m)][static_cast<std::size_t>(k)] =
-              L == before && std::abs(rec.qd_ref(j)) > 1e-6;
+          in_band[mi][ki] = L == before && std::abs(rec.qd_ref(j)) > 1e-6;
+          // The load's measured acceleration over the crossing's entry and exit periods (and the
+          // next, the servo's catch-up spilling over).
+          if (k > 0 && in_band[mi][ki] != in_band[mi][ki - 1])
+            for (int kk = std::max(k - 1, 1); kk < std::min(k + 3, N); ++kk)
+              dv[mi][static_cast<std::size_t>(kk)] =
+                  data.records[static_cast<std::size_t>(kk)].qd(j) -
+                  data.records[static_cast<std::size_t>(kk - 1)].qd(j);
         }
       }
       for (int i = 0; i < R; ++i) {
         const Row& w = rows[static_cast<std::size_t>(i)];
-        if (w.channel != 0) continue;
+        if (w.channel > 1) continue;
         const auto it = std::find(moving.begin(), moving.end(), w.joint);
+        if (it == moving.end()) continue;
         const auto m = static_cast<Eigen::Index>(it - moving.begin());
-        if (in_band[static_cast<std::size_t>(m)][static_cast<std::size_t>(w.record)])
-          X(i, m) = -recordOf(w).qd_ref(w.joint);
+        const auto mi = static_cast<std::size_t>(m), ki = static_cast<std::size_t>(w.record);
+        if (w.channel == 0 && in_band[mi][ki]) X(i, m) = -recordOf(w).qd_ref(w.joint);
+        if (w.channel == 1) X(i, jointCount + m) = dv[mi][ki] / data.period;
       }
       return X;
     };
-    const int split_rec = static_cast<int>(o.train_fraction * N);
-    std::vector<double> widths, rss;
-    for (double b = 0.001; b < 0.081; b *= 1.15) {
-      const Eigen::MatrixXd X = bandRegressor(b);
-      std::vector<int> tr;
-      for (int i = 0; i < R; ++i)
-        if (rows[static_cast<std::size_t>(i)].record < split_rec) tr.push_back(i);
-      Eigen::MatrixXd A(static_cast<Eigen::Index>(tr.size()), jointCount);
-      Eigen::VectorXd y(static_cast<Eigen::Index>(tr.size()));
-      for (std::size_t i = 0; i < tr.size(); ++i) {
-        const double wt = 1.0 / sigma[rows[static_cast<std::size_t>(tr[i])].channel];
-        A.row(static_cast<Eigen::Index>(i)) = X.row(tr[i]) * wt;
-        y(static_cast<Eigen::Index>(i)) = res(tr[i]) * wt;
+    Candidate c = scanned("backlash", "width", 0.001, 0.12, bandRegressor);
+    for (const char* kind : {"gain[", "inertia["})
+      for (Eigen::Index m = 0; m < jointCount; ++m) {
+        if (kind[0] == 'g') c.nonneg.push_back(static_cast<int>(c.params.size()));
+        c.params.push_back(
+            kind + d.actuated[static_cast<std::size_t>(moving[static_cast<std::size_t>(m)])].name +
+            "]");
       }
-      const Eigen::VectorXd th = A.colPivHouseholderQr().solve(y);
-      widths.push_back(b);
-      rss.push_back((y - A * th).squaredNorm());
-    }
-    const auto best =
-        static_cast<std::size_t>(std::min_element(rss.begin(), rss.end()) - rss.begin());
-    // Interval: the widths whose training residual is within a chi-square(1) 95 % step of the
-    // best (residual variance from the best fit; the F statistic's correlation correction is
-    // not applied here, so the interval is on the narrow side).
-    const double n_tr = static_cast<double>(split_rec) * static_cast<double>(moving.size());
-    const double s2 = rss[best] / std::max(n_tr, 1.0);
-    double lo = widths[best], hi = widths[best];
-    for (std::size_t i = 0; i < widths.size(); ++i)
-      if (rss[i] - rss[best] <= 3.84 * s2) {
-        lo = std::min(lo, widths[i]);
-        hi = std::max(hi, widths[i]);
-      }
-    Candidate c;
-    c.name = "backlash";
-    c.X = bandRegressor(widths[best]);
-    for (Eigen::Index m = 0; m < jointCount; ++m) {
-      c.params.push_back(
-          "gain[" + d.actuated[static_cast<std::size_t>(moving[static_cast<std::size_t>(m)])].name +
-          "]");
-      c.nonneg.push_back(static_cast<int>(m));
-    }
-
-    c.scanned = "width";
-    c.scanned_value = widths[best];
-    c.scanned_ci = std::max(0.5 * (hi - lo), 0.5 * widths[best] * (1.15 - 1.0));
     cands.push_back(std::move(c));
   }
-  // Joint friction per moving joint: the motor torque carries it, and the position loop lags by
-  // friction / stiffness.
-  for (int kind = 0; kind < 2; ++kind) {
-    Candidate c;
-    c.name = kind == 0 ? "joint_viscous_friction" : "joint_coulomb_friction";
+  // Viscous joint friction per moving joint: the motor torque carries f v, and the position loop
+  // lags by f v / stiffness.
+  if (!moving.empty()) {
+    Candidate c{"joint_viscous_friction", {}, Eigen::MatrixXd::Zero(R, 0), {}};
     c.X = Eigen::MatrixXd::Zero(R, static_cast<Eigen::Index>(moving.size()));
     for (std::size_t m = 0; m < moving.size(); ++m) {
       const int j = moving[m];
-      c.params.push_back((kind == 0 ? "viscous[" : "coulomb[") +
-                         d.actuated[static_cast<std::size_t>(j)].name + "]");
+      c.params.push_back("viscous[" + d.actuated[static_cast<std::size_t>(j)].name + "]");
       c.nonneg.push_back(static_cast<int>(m));
       for (int i = 0; i < R; ++i) {
         const Row& w = rows[static_cast<std::size_t>(i)];
         if (w.joint != j) continue;
         const double v = recordOf(w).qd(j);
-        const double f = kind == 0 ? v : std::tanh(v / 0.01);
         c.X(i, static_cast<Eigen::Index>(m)) =
-            w.channel == 1 ? f : -(1.0 - rho) * f / o.servo_stiffness;
+            w.channel == 1 ? v : -(1.0 - rho) * v / o.servo_stiffness;
       }
     }
-    if (!moving.empty()) cands.push_back(std::move(c));
+    cands.push_back(std::move(c));
+  }
+  // Coulomb joint friction F (stick-slip): the joint sticks until the servo's error reaches
+  // F / stiffness, i.e. the target follows a play operator of half-width F / k on the command
+  // (over each period the command runs from q_ref to q_ref + qd_ref T), and the motor torque
+  // carries f = k (q_ref - stick), between -F and F. Positions: the servo tracks the stuck target,
+  // q(k+1) - prediction = -(f_end - rho f_start) / k; torques: the period's mean of f. F sets the
+  // play's width (scanned, 0.2-20 N m) and, per moving joint, the gain (~F) is fitted.
+  if (!moving.empty()) {
+    const auto jointCount = static_cast<Eigen::Index>(moving.size());
+    auto stickRegressor = [&](double F) {
+      const double h = F / o.servo_stiffness;
+      Eigen::MatrixXd f0(N, jointCount), f1(N, jointCount);  // normalised f at start / end
+      for (Eigen::Index m = 0; m < jointCount; ++m) {
+        const int j = moving[static_cast<std::size_t>(m)];
+        double st = data.records[0].q_ref(j);
+        for (int k = 0; k < N; ++k) {
+          const Record& rec = data.records[static_cast<std::size_t>(k)];
+          const double q_start = rec.q_ref(j), q_end = rec.q_ref(j) + rec.qd_ref(j) * data.period;
+          st = std::clamp(st, q_start - h, q_start + h);
+          f0(k, m) = (q_start - st) / h;
+          st = std::clamp(st, q_end - h, q_end + h);
+          f1(k, m) = (q_end - st) / h;
+        }
+      }
+      Eigen::MatrixXd X = Eigen::MatrixXd::Zero(R, jointCount);
+      for (int i = 0; i < R; ++i) {
+        const Row& w = rows[static_cast<std::size_t>(i)];
+        if (w.channel > 1) continue;
+        const auto it = std::find(moving.begin(), moving.end(), w.joint);
+        if (it == moving.end()) continue;
+        const auto m = static_cast<Eigen::Index>(it - moving.begin());
+        const auto k = static_cast<Eigen::Index>(w.record);
+        X(i, m) = w.channel == 1 ? 0.5 * (f0(k, m) + f1(k, m))
+                                 : -(f1(k, m) - rho * f0(k, m)) / o.servo_stiffness;
+      }
+      return X;
+    };
+    Candidate c = scanned("joint_coulomb_friction", "friction", 0.2, 20.0, stickRegressor);
+    for (Eigen::Index m = 0; m < jointCount; ++m) {
+      c.params.push_back(
+          "coulomb[" +
+          d.actuated[static_cast<std::size_t>(moving[static_cast<std::size_t>(m)])].name + "]");
+      c.nonneg.push_back(static_cast<int>(m));
+    }
+    cands.push_back(std::move(c));
   }
   // A payload (mass m at offset c in the link frame): the sensors carry m g more, and the joints
   // holding the link its gravity torque (linear in m and m c).
@@ -778,6 +839,9 @@ Identification identify(const Dataset& data, const core::Plan& plan,
   }
   if (out.candidates.size() > 1) out.runner_up = out.candidates[1].name;
   out.error_after = rms(final_resid, eval);
+  auto aboveNoise = [](double e) { return std::sqrt(std::max(e * e - 1.0, 0.0)); };
+  out.excess_before = aboveNoise(out.error_before);
+  out.excess_after = aboveNoise(out.error_after);
   out.residuals.reserve(static_cast<std::size_t>(R));
   for (int i = 0; i < R; ++i) {
     const Row& w = rows[static_cast<std::size_t>(i)];

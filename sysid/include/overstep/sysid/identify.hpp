@@ -69,6 +69,9 @@ struct Identification {
   std::string runner_up;
   std::map<std::string, double> parameters, ci95;
   double error_before = 0.0, error_after = 0.0;  ///< held-out RMS of the normalised residual
+  /// The same above the measurement noise, sqrt(max(RMS^2 - 1, 0)): the model error alone (an
+  /// effect that is small against the noise cannot drop the raw RMS below ~1).
+  double excess_before = 0.0, excess_after = 0.0;
   double whiteness = 0.0;  ///< lag-1 autocorrelation of the held-out residual before
   std::map<std::string, ChannelError> channels;
   std::vector<CandidateFit> candidates;  ///< best first
