@@ -68,6 +68,7 @@ std::string PlannerConfig::toJson() const {
   j["swept_clearance"] = swept_clearance;
   j["passive_polish"] = passive_polish;
   j["approach_samples"] = approach_samples;
+  j["transfer_anchor"] = transfer_anchor;
   j["velocity_margin"] = velocity_margin;
   j["self_clearance"] = self_clearance;
   j["pelvis_tilt"] = pelvis_tilt;
@@ -160,6 +161,10 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
       c.samples_per_phase = r.perPhase<int>(v, key);
     } else if (key == "spline_intervals") {
       c.spline_intervals = r.perPhase<int>(v, key);
+    } else if (key == "transfer_anchor") {
+      c.transfer_anchor = v.as<std::string>();
+      if (c.transfer_anchor != "right" && c.transfer_anchor != "left")
+        r.fail(key, "expected right or left");
     } else if (key == "spline_degree") {
       c.spline_degree = r.as<int>(v, key);
       if (c.spline_degree != 3 && c.spline_degree != 5) r.fail(key, "expected 3 or 5");

@@ -11,7 +11,7 @@ const std::array<PhaseInfo, kPhaseCount>& phaseTable() {
   static const std::array<PhaseInfo, kPhaseCount> table = {{
       {"ds_start", true, true, Foot::Left},
       {"ss_right_swing", false, true, Foot::Left},
-      {"ds_transfer", true, true, Foot::Left},
+      {"ds_transfer", true, true, Foot::Right},
       {"ss_left_swing", true, false, Foot::Right},
       {"ds_end", true, true, Foot::Right},
   }};

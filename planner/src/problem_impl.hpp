@@ -122,6 +122,11 @@ struct OverstepProblem::Impl {
   static constexpr int kEvents = 4;
   int event_eq_off[kEvents]{};
   int event_eq_cnt[kEvents]{};
+  // Per phase, the foot whose placement fixes the floating base; per event (instants t1..t4),
+  // the leg that changes representation (double-support inverse kinematics <-> spline). Set up
+  // from transfer_anchor.
+  int anchor_of[kPhaseCount] = {kLeft, kLeft, kRight, kRight, kRight};
+  int event_leg[kEvents] = {kRight, kLeft, kLeft, kLeft};
 
   struct Workspace {
     std::unique_ptr<robots::WholeBodyModel> model;
@@ -291,6 +296,18 @@ struct OverstepProblem::Impl {
       n_ineq = static_cast<int>(ineq_fam.size());
       n_eq = static_cast<int>(eq_fam.size());
     }
+    for (int i = 0; i < kPhaseCount; ++i)
+      anchor_of[i] =
+          phaseTable()[static_cast<std::size_t>(i)].base_foot == Foot::Right ? kRight : kLeft;
+    // The landed right foot carries the transfer (phaseTable()): at its touchdown the left leg
+    // goes from spline to inverse kinematics, and back at its lift-off. With "left" the lifting
+    // foot does, and the right leg changes representation at both ends of the transfer.
+    if (cfg.transfer_anchor == "left") {
+      anchor_of[2] = kLeft;
+      event_leg[1] = event_leg[2] = kRight;
+    } else if (cfg.transfer_anchor != "right") {
+      throw InputError("planner: transfer_anchor: expected right or left");
+    }
     for (int e = 0; e < kEvents; ++e) {
       event_eq_off[e] = n_eq;
       for (int r = 0; r < 12; ++r) eq_fam.push_back(Family::Switching);
@@ -334,14 +351,19 @@ struct OverstepProblem::Impl {
     for (int f = 0; f < 3; ++f) w.feet[f] = x.segment<2>(lay.feet + 2 * f);
   }
 
+  /// Where a foot stands in a phase in which it is in contact.
+  Eigen::Isometry3d footPlacement(int phase, int foot_index, const Workspace& w) const {
+    if (foot_index == kLeft)
+      return phase <= 2 ? placement(0.0, cfg.start_half_width)  // left start
+                        : placement(w.feet[2].x(), w.feet[2].y());
+    return phase == 0 ? placement(w.feet[0].x(), w.feet[0].y())  // right start
+                      : placement(w.feet[1].x(), w.feet[1].y());
+  }
   Eigen::Isometry3d anchorPlacement(int phase, const Workspace& w) const {
-    if (phase <= 2) return placement(0.0, cfg.start_half_width);  // left start
-    return placement(w.feet[1].x(), w.feet[1].y());               // right landing
+    return footPlacement(phase, anchor_of[phase], w);
   }
   Eigen::Isometry3d otherPlacement(int phase, const Workspace& w) const {
-    if (phase == 0) return placement(w.feet[0].x(), w.feet[0].y());
-    if (phase == 2) return placement(w.feet[1].x(), w.feet[1].y());
-    return placement(w.feet[2].x(), w.feet[2].y());  // phase 4
+    return footPlacement(phase, 1 - anchor_of[phase], w);
   }
 
   /// Builds the robot state at time t in the contact configuration of `phase`.
@@ -369,7 +391,7 @@ struct OverstepProblem::Impl {
       st.a(flex_coord[static_cast<std::size_t>(j)]) = fa(j);
     }
     const auto& ph = phaseTable()[static_cast<std::size_t>(phase)];
-    const int anchor = ph.base_foot == Foot::Right ? kRight : kLeft;
+    const int anchor = anchor_of[phase];
     const int other = 1 - anchor;
     m.anchorBase(sole_frame[anchor], anchorPlacement(phase, w), st.q, st.v, st.a);
     st.contact[kRight] = ph.right_contact;
@@ -435,7 +457,19 @@ struct OverstepProblem::Impl {
     int cols[6];
     for (int j = 0; j < 6; ++j) cols[j] = leg_coord[static_cast<std::size_t>(6 * leg + j)];
     Eigen::Matrix<double, 6, 6> J;
+    // From the leg's spline (a seed the optimizer moves freely), and if that does not converge
+    // (a seed far off can lead damped Newton astray: measured, a foot 0.6 m up on a restored
+    // point), again from half-sitting; the better result is kept.
+    Eigen::VectorXd q_seed = st.q;
     st.ik_error = solveLegIk(m, leg, target, st.q, 1e-8, 30, 1e-11, false);
+    if (st.ik_error > 1e-9) {
+      for (int j = 0; j < 6; ++j) q_seed(cols[j]) = q_rest(cols[j]);
+      const double e2 = solveLegIk(m, leg, target, q_seed, 1e-8, 60, 1e-11, false);
+      if (e2 < st.ik_error) {
+        st.q = q_seed;
+        st.ik_error = e2;
+      }
+    }
     m.setPositions(st.q);
     const Eigen::MatrixXd Jf = m.frameJacobian(f);
     for (int j = 0; j < 6; ++j) J.col(j) = Jf.col(cols[j]);
@@ -497,7 +531,7 @@ struct OverstepProblem::Impl {
   Eigen::MatrixXd passiveDirections(Workspace& w, int phase, const Eigen::VectorXd& q) const {
     robots::WholeBodyModel& m = *w.model;
     const auto& ph = phaseTable()[static_cast<std::size_t>(phase)];
-    const int anchor = ph.base_foot == Foot::Right ? kRight : kLeft;
+    const int anchor = anchor_of[phase];
     const bool ds = ph.right_contact && ph.left_contact;
     m.setPositions(q);
     const Eigen::Isometry3d X = m.framePose(sole_frame[anchor]);
@@ -615,7 +649,7 @@ struct OverstepProblem::Impl {
       da = DA[k];
       // U keeps the anchor sole fixed to first order; re-anchoring the base keeps it exactly.
       const auto& ph = phaseTable()[static_cast<std::size_t>(when[k].second)];
-      const int anchor = ph.base_foot == Foot::Right ? kRight : kLeft;
+      const int anchor = anchor_of[when[k].second];
       m.setPositions(q[k]);
       const Eigen::Isometry3d X = m.framePose(sole_frame[anchor]);
       q[k] = m.integrate(q[k], U[k] * d, 1.0);
@@ -743,10 +777,11 @@ struct OverstepProblem::Impl {
   }
 
   // -------------------------------------------------------------- rows of one sample
-  double minHeight(double s) const {
-    const double sn = std::sin(M_PI * s);
-    return cfg.swing_clearance * sn * sn;
-  }
+  /// The swing sole corners' minimal height: swing_clearance sin(pi s), whose slope at the
+  /// contact switches keeps the last samples before a touchdown a few millimetres up (at
+  /// sin^2 the sample 8 % of the swing before touchdown asked for 1.3 mm, and a corner dipped
+  /// 1.8 mm below the ground between it and the touchdown; measured, docs/planner.md).
+  double minHeight(double s) const { return cfg.swing_clearance * std::sin(M_PI * s); }
 
   void sampleRows(Workspace& w, int k, SampleOut& out) const {
     const GridPoint& g = grid[static_cast<std::size_t>(k)];
@@ -886,8 +921,7 @@ struct OverstepProblem::Impl {
     }
     int e = 0;
     if (ds) {
-      const int leg =
-          phaseTable()[static_cast<std::size_t>(g.phase)].base_foot == Foot::Right ? kLeft : kRight;
+      const int leg = 1 - anchor_of[g.phase];
       for (int j = 0; j < 6; ++j) {
         const int a = leg_act[static_cast<std::size_t>(6 * leg + j)];
         const auto& aj = d.actuated[static_cast<std::size_t>(a)];
@@ -954,12 +988,11 @@ struct OverstepProblem::Impl {
     //    3 -> t4 (start of phase 4). The DS phase whose IK is matched, and the leg.
     static const int ds_phase[4] = {0, 2, 2, 4};
     static const int boundary[4] = {1, 2, 3, 4};
-    static const int leg_of[4] = {kRight, kRight, kRight, kLeft};
     const double t = w.timing->start(boundary[e]);
     buildState(w, ds_phase[e], t);
     const State& st = w.st;
     const PhaseSpline::Basis b = w.spline->evaluate(t);
-    const int leg = leg_of[e];
+    const int leg = event_leg[e];
     out.resize(event_eq_cnt[e]);
     int r = 0;
     for (int j = 0; j < 6; ++j) {

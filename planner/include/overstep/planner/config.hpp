@@ -23,7 +23,7 @@ struct SolverSettings {
 };
 
 struct PlannerConfig {
-  std::array<int, kPhaseCount> samples_per_phase{8, 14, 5, 14, 8};
+  std::array<int, kPhaseCount> samples_per_phase{9, 12, 9, 12, 9};
   std::array<int, kPhaseCount> spline_intervals{3, 6, 3, 6, 3};
   int spline_degree = 3;  ///< 3 (cubic) or 5 (quintic: continuous jerk; docs/planner.md)
   std::array<double, kPhaseCount> duration_min{0.4, 0.7, 0.15, 0.7, 0.4};
@@ -41,14 +41,14 @@ struct PlannerConfig {
   double friction = 0.7, torsion = 0.02, min_normal_force = 20.0;
 
   double swing_clearance = 0.02, obstacle_clearance = 0.01, self_clearance = 0.005;
-  double pelvis_tilt = 0.005, leg_reach = 0.585, smooth_min_rho = 200.0;
+  double pelvis_tilt = 0.005, leg_reach = 0.585, smooth_min_rho = 1000.0;
   /// Fraction of the CoP box, friction and torsion coefficients and pelvis range enforced at the
   /// samples: the motion between samples keeps the rest as margin (`overstep check` verifies on a
   /// 1 kHz grid).
   double limit_margin = 0.8;
   /// N m. 0: the double-support sway balance is an equality at each sample; > 0: a band
   /// |residual| <= ds_balance_band (two inequality rows), easier on SLSQP with dense sampling.
-  double ds_balance_band = 0.0;
+  double ds_balance_band = 0.3;
   /// Swept clearance: each leg capsule's obstacle and self-collision distance at a sample is
   /// reduced by this factor times its fastest endpoint's speed times half the sample interval (the
   /// farthest it can travel before the nearer sample), so that the clearance holds between
@@ -64,6 +64,13 @@ struct PlannerConfig {
   /// touchdown (the landing sole's corners only); 0: none (default: with them SLSQP stalled at
   /// scaled violations of 0.8-1 in every 5 cm run; docs/planner.md).
   double approach_samples = 0.0;
+  /// The foot whose placement fixes the floating base during the transfer double support
+  /// (ds_transfer): "right" (default), the foot that has just landed and carries the body through
+  /// the second swing, so that the stance leg and the base stay smooth through the second lift-off
+  /// and only the lifting leg changes representation there; "left" (sessions 1-5): the lifting
+  /// foot, whose switch made the stance leg's and the base's accelerations, and so the total
+  /// contact wrench, jump at the lift-off (docs/planner.md).
+  std::string transfer_anchor = "right";
   /// Fraction of each joint's velocity limit enforced at the samples (the motion between them
   /// overshoots; measured 9 % at 1.0).
   double velocity_margin = 0.9;
