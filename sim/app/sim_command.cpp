@@ -161,9 +161,18 @@ class SimProcess {
       reject("command " + std::to_string(msg->seq) + ": " + why);
       return;
     }
+    if (msg->seq == last_seq_ && o_.lockstep) return;  // the same command again (a resend)
     if (msg->seq <= last_seq_) {
       reject("command " + std::to_string(msg->seq) + ": stale sequence number (last accepted " +
              std::to_string(last_seq_) + ")");
+      return;
+    }
+    // Lockstep: a command stamped with a robot time before ours answers a state already stepped
+    // past (the runtime stamps its commands with the time of the state it answers).
+    const auto now_us = static_cast<std::int64_t>(std::llround(sim_.time() * 1e6));
+    if (o_.lockstep && msg->utime < now_us) {
+      reject("command " + std::to_string(msg->seq) + ": answers robot time " +
+             std::to_string(msg->utime) + " us, already at " + std::to_string(now_us) + " us");
       return;
     }
     last_seq_ = msg->seq;
