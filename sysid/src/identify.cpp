@@ -463,6 +463,12 @@ Identification identify(const Dataset& data, const core::Plan& plan,
   });
   cands.push_back({"command_delay", {"delay"}, shift, {0}});
   cands.push_back({"command_lag", {"lag"}, shift, {0}});
+  // Index among the moving joints of a joint-position or motor-torque row (-1: another row).
+  auto movingJointOf = [&](const Row& w) -> Eigen::Index {
+    if (w.channel > 1) return -1;
+    const auto it = std::find(moving.begin(), moving.end(), w.joint);
+    return it == moving.end() ? -1 : static_cast<Eigen::Index>(it - moving.begin());
+  };
   // A candidate whose shape depends nonlinearly on one value (a width): the value is scanned on
   // a geometric grid (15 % steps) over [lo, hi) on the training rows, each column's gain fitted
   // linearly; the interval holds the values whose training residual is within a chi-square(1)
@@ -547,10 +553,8 @@ Identification identify(const Dataset& data, const core::Plan& plan,
       }
       for (int i = 0; i < R; ++i) {
         const Row& w = rows[static_cast<std::size_t>(i)];
-        if (w.channel > 1) continue;
-        const auto it = std::find(moving.begin(), moving.end(), w.joint);
-        if (it == moving.end()) continue;
-        const auto m = static_cast<Eigen::Index>(it - moving.begin());
+        const Eigen::Index m = movingJointOf(w);
+        if (m < 0) continue;
         const auto mi = static_cast<std::size_t>(m), ki = static_cast<std::size_t>(w.record);
         if (w.channel == 0 && in_band[mi][ki]) X(i, m) = -recordOf(w).qd_ref(w.joint);
         if (w.channel == 1) X(i, jointCount + m) = dv[mi][ki] / data.period;
@@ -612,10 +616,8 @@ Identification identify(const Dataset& data, const core::Plan& plan,
       Eigen::MatrixXd X = Eigen::MatrixXd::Zero(R, jointCount);
       for (int i = 0; i < R; ++i) {
         const Row& w = rows[static_cast<std::size_t>(i)];
-        if (w.channel > 1) continue;
-        const auto it = std::find(moving.begin(), moving.end(), w.joint);
-        if (it == moving.end()) continue;
-        const auto m = static_cast<Eigen::Index>(it - moving.begin());
+        const Eigen::Index m = movingJointOf(w);
+        if (m < 0) continue;
         const auto k = static_cast<Eigen::Index>(w.record);
         X(i, m) = w.channel == 1 ? 0.5 * (f0(k, m) + f1(k, m))
                                  : -(f1(k, m) - rho * f0(k, m)) / o.servo_stiffness;
