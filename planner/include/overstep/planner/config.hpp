@@ -41,7 +41,7 @@ struct PlannerConfig {
   double friction = 0.7, torsion = 0.02, min_normal_force = 20.0;
 
   double swing_clearance = 0.02, obstacle_clearance = 0.01, self_clearance = 0.005;
-  double pelvis_tilt = 0.005, leg_reach = 0.585, smooth_min_rho = 1000.0;
+  double pelvis_tilt = 0.005, leg_reach = 0.595, smooth_min_rho = 1000.0;
   /// Fraction of the CoP box, friction and torsion coefficients and pelvis range enforced at the
   /// samples: the motion between samples keeps the rest as margin (`overstep check` verifies on a
   /// 1 kHz grid).
