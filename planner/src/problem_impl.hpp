@@ -122,11 +122,10 @@ struct OverstepProblem::Impl {
   static constexpr int kEvents = 4;
   int event_eq_off[kEvents]{};
   int event_eq_cnt[kEvents]{};
-  // Per phase, the foot whose placement fixes the floating base; per event (instants t1..t4),
-  // the leg that changes representation (double-support inverse kinematics <-> spline). Set up
-  // from transfer_anchor.
-  int anchor_of[kPhaseCount] = {kLeft, kLeft, kRight, kRight, kRight};
-  int event_leg[kEvents] = {kRight, kLeft, kLeft, kLeft};
+  // Per phase, the foot whose placement fixes the floating base (phaseTable(), the transfer's
+  // from transfer_anchor). At a switch the leg changing representation (double-support inverse
+  // kinematics <-> spline) is that double-support phase's other leg.
+  int anchor_of[kPhaseCount]{};
 
   struct Workspace {
     std::unique_ptr<robots::WholeBodyModel> model;
@@ -304,7 +303,6 @@ struct OverstepProblem::Impl {
     // foot does, and the right leg changes representation at both ends of the transfer.
     if (cfg.transfer_anchor == "left") {
       anchor_of[2] = kLeft;
-      event_leg[1] = event_leg[2] = kRight;
     } else if (cfg.transfer_anchor != "right") {
       throw InputError("planner: transfer_anchor: expected right or left");
     }
@@ -460,9 +458,9 @@ struct OverstepProblem::Impl {
     // From the leg's spline (a seed the optimizer moves freely), and if that does not converge
     // (a seed far off can lead damped Newton astray: measured, a foot 0.6 m up on a restored
     // point), again from half-sitting; the better result is kept.
-    Eigen::VectorXd q_seed = st.q;
     st.ik_error = solveLegIk(m, leg, target, st.q, 1e-8, 30, 1e-11, false);
     if (st.ik_error > 1e-9) {
+      Eigen::VectorXd q_seed = st.q;  // the leg IK changes only the leg's joints
       for (int j = 0; j < 6; ++j) q_seed(cols[j]) = q_rest(cols[j]);
       const double e2 = solveLegIk(m, leg, target, q_seed, 1e-8, 60, 1e-11, false);
       if (e2 < st.ik_error) {
@@ -992,7 +990,7 @@ struct OverstepProblem::Impl {
     buildState(w, ds_phase[e], t);
     const State& st = w.st;
     const PhaseSpline::Basis b = w.spline->evaluate(t);
-    const int leg = event_leg[e];
+    const int leg = 1 - anchor_of[ds_phase[e]];
     out.resize(event_eq_cnt[e]);
     int r = 0;
     for (int j = 0; j < 6; ++j) {
