@@ -74,6 +74,7 @@ std::string PlannerConfig::toJson() const {
   j["pelvis_tilt"] = pelvis_tilt;
   j["leg_reach"] = leg_reach;
   j["limit_margin"] = limit_margin;
+  j["pelvis_margin"] = pelvis_margin;
   j["ds_balance_band"] = ds_balance_band;
   j["weights"] = weights;
   j["head_pitch_offset"] = head_pitch_offset;
@@ -116,6 +117,7 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
                                          "height_homotopy_step",
                                          "head_pitch_offset",
                                          "limit_margin",
+                                         "pelvis_margin",
                                          "ds_balance_band",
                                          "swept_clearance",
                                          "passive_polish",
@@ -143,6 +145,7 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
                                            {"height_homotopy_step", &c.height_homotopy_step},
                                            {"head_pitch_offset", &c.head_pitch_offset},
                                            {"limit_margin", &c.limit_margin},
+                                           {"pelvis_margin", &c.pelvis_margin},
                                            {"ds_balance_band", &c.ds_balance_band},
                                            {"swept_clearance", &c.swept_clearance},
                                            {"passive_polish", &c.passive_polish},
@@ -226,6 +229,7 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
   if (!(c.step_length_min < c.step_length_max)) r.fail("step_length_min", "expected < max");
   if (!(c.foot_y_min < c.foot_y_max)) r.fail("foot_y_min", "expected < foot_y_max");
   if (c.limit_margin > 1.0) r.fail("limit_margin", "expected a fraction in (0, 1]");
+  if (c.pelvis_margin > 1.0) r.fail("pelvis_margin", "expected a fraction in (0, 1]");
   return c;
 }
 

@@ -64,7 +64,7 @@ core::Plan OverstepProblem::toPlan(const Eigen::VectorXd& x, double rate) {
   for (int k = 0; k < n; ++k) {
     const double t = uniq[static_cast<std::size_t>(k)].first;
     const int phase = uniq[static_cast<std::size_t>(k)].second;
-    m.stateFrom(w, phase, q[static_cast<std::size_t>(k)], v[static_cast<std::size_t>(k)],
+    m.stateFrom(w, phase, t, q[static_cast<std::size_t>(k)], v[static_cast<std::size_t>(k)],
                 a[static_cast<std::size_t>(k)]);
     const State& st = w.st;
     p.t(k) = t;

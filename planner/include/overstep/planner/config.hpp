@@ -46,6 +46,11 @@ struct PlannerConfig {
   /// samples: the motion between samples keeps the rest as margin (`overstep check` verifies on a
   /// 1 kHz grid).
   double limit_margin = 0.8;
+  /// Fraction of the pelvis range enforced at the samples in the homotopy's last stage (earlier
+  /// stages: limit_margin): the pelvis rotates fastest in the last swing interval before a
+  /// touchdown (1.2 mrad beyond the range between samples at 0.8 on the 20 cm run; measured,
+  /// docs/planner.md).
+  double pelvis_margin = 0.5;
   /// N m. 0: the double-support sway balance is an equality at each sample; > 0: a band
   /// |residual| <= ds_balance_band (two inequality rows), easier on SLSQP with dense sampling.
   double ds_balance_band = 0.3;
@@ -58,8 +63,10 @@ struct PlannerConfig {
   /// samples so that they obey their equations of motion under the planned joint trajectories
   /// (OverstepProblem::toPlan, docs/planner.md); 2 (default): the same, with the correction
   /// blended back to zero before each lift-off, where the unloading foot's wrench must vanish;
-  /// 0: the splines as solved.
-  double passive_polish = 2.0;
+  /// 3 (default): single support only (blended to zero before each touchdown too; double
+  /// support keeps the solver's motion, whose residual is the sway-balance band); 0: the
+  /// splines as solved.
+  double passive_polish = 3.0;
   /// 1: an extra sample half an interval before each lift-off (the sway balance only) and
   /// touchdown (the landing sole's corners only); 0: none (default: with them SLSQP stalled at
   /// scaled violations of 0.8-1 in every 5 cm run; docs/planner.md).
