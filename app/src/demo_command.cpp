@@ -42,6 +42,7 @@ struct DemoOptions {
   std::string shape = "box";
   bool replan = false, allow_invalid = false, no_stabilizer = false, json = false;
   bool no_report = false, identify = false;
+  unsigned seed = 1;             ///< the simulator's sensor-noise seed
   double timeout = 120.0;        ///< s of wall time for the run (after planning)
   double plan_time_limit = 0.0;  ///< s, passed to overstep plan (0: its configuration's)
 };
@@ -218,7 +219,7 @@ json demoRun(const DemoOptions& o, const fs::path& run) {
       spawn(replay_argv, (run / "replay.json").string(), (run / "replay.log").string());
   std::vector<std::string> sim_argv = {
       exe,      "sim",       "--lockstep", "--robot", o.sim_robot.empty() ? o.robot : o.sim_robot,
-      "--json", "--lcm-url", url};
+      "--json", "--lcm-url", url,          "--seed",  std::to_string(o.seed)};
   // The simulated bar is the envelope itself: --margin is extra clearance for the planner only
   // (the last two obstacle arguments).
   sim_argv.insert(sim_argv.end(), obstacle_args.begin(), obstacle_args.end() - 2);
@@ -335,6 +336,7 @@ json identifyLoop(const DemoOptions& o, const fs::path& run) {
               -1) != kExitOk)
     throw std::runtime_error("the excitation plan failed (see " + (ex / "plan.err").string() + ")");
   DemoOptions oe = o;
+  oe.seed = o.seed + 1;  // another run: its own sensor noise
   oe.plan = (ex / "excite.json").string();
   oe.allow_invalid = true;  // a quasi-static split of the wrenches: overstep check rejects it
   oe.no_report = true;
@@ -364,8 +366,11 @@ json identifyLoop(const DemoOptions& o, const fs::path& run) {
   std::fprintf(stderr, "demo --identify: 4/4 re-plan and run with %s (%s)\n", overlay.c_str(),
                id.value("effect", "?").c_str());
   DemoOptions o2 = o;
+  o2.seed = o.seed + 2;
   o2.robot = overlay.string();
-  o2.sim_robot = o.robot;  // the simulated robot stays what it is (base model + truth)
+  o2.plan.clear();  // --plan: the run before; the re-plan starts from it
+  o2.sim_robot =
+      o.sim_robot.empty() ? o.robot : o.sim_robot;  // the simulated robot stays what it is
   // The same motion re-solved for the identified model: a plan from scratch for another model
   // can be another motion (5 cm bar, session 6: 6.79 s instead of 6.37 s), which says nothing
   // about the model.
@@ -383,11 +388,12 @@ int runDemo(const DemoOptions& o) {
   if (!fs::is_regular_file(o.robot)) throw InputError("robot file not found: " + o.robot);
   if (!o.config.empty() && !fs::is_regular_file(o.config))
     throw InputError("planner config not found: " + o.config);
+  if (!o.sim_robot.empty() && !fs::is_regular_file(o.sim_robot))
+    throw InputError("simulated robot file not found: " + o.sim_robot);
   if (!o.truth.empty() && !fs::is_regular_file(o.truth))
     throw InputError("truth file not found: " + o.truth);
-  if (o.identify && !o.plan.empty())
-    throw InputError(
-        "--identify re-plans with the identified model: give the obstacle, not --plan");
+  if (!o.plan.empty() && !fs::is_regular_file(o.plan))
+    throw InputError("plan file not found: " + o.plan);
   const fs::path run = o.run_dir.empty() ? fs::path(o.run_root) / utcStamp() : fs::path(o.run_dir);
   std::error_code ec;
   fs::create_directories(run, ec);
@@ -441,6 +447,13 @@ void registerDemoCommand(CLI::App& app, cli::Registry& registry) {
                   "Extra clearance on every side for the planner (not the simulated bar), m")
       ->default_val(0.0);
   sub->add_option("--truth", o->truth, "Simulate with undeclared effects (docs/truth-file.md)");
+  sub->add_option("--sim-robot", o->sim_robot,
+                  "The simulated robot's model when it differs from --robot (e.g. --robot an "
+                  "identified overlay, the simulator the base model plus --truth)");
+  sub->add_option("--seed", o->seed,
+                  "The simulator's sensor-noise seed (--identify: the experiment and the second "
+                  "run use SEED + 1 and SEED + 2)")
+      ->default_val(1u);
   sub->add_option("--run-root", o->run_root, "Folder of run folders and the plan cache")
       ->default_val("runs");
   sub->add_option("--run-dir", o->run_dir, "This run's folder (default: RUN_ROOT/<UTC time>)");
@@ -452,7 +465,8 @@ void registerDemoCommand(CLI::App& app, cli::Registry& registry) {
                   "Wall-time limit of the planner, s (default: its configuration's)");
   sub->add_flag("--replan", o->replan, "Ignore the plan cache");
   sub->add_option("--plan", o->plan,
-                  "Replay this plan file instead of planning (its validity: overstep check)");
+                  "Replay this plan file instead of planning (its validity: overstep check; with "
+                  "--identify: the run before, and the re-plan starts from it)");
   sub->add_flag("--no-report", o->no_report, "Skip the figures (overstep report) at the end");
   sub->add_flag("--allow-invalid-plan", o->allow_invalid,
                 "Replay the planner's best attempt when no plan passes the check");
@@ -467,6 +481,7 @@ void registerDemoCommand(CLI::App& app, cli::Registry& registry) {
       "  overstep demo --obstacle-height 0.05 --json    # a small bar, verdict as JSON\n"
       "  overstep demo --truth truth.yaml               # on a robot with undeclared effects\n"
       "  overstep demo --truth truth.yaml --identify    # ... identify it, re-plan, run again\n"
+      "  overstep demo --plan plan.json --truth truth.yaml --identify --seed 2\n"
       "Writes RUN_DIR/{plan.json, bus.lcmlog, replay.json, sim.json, verdict.json}.\n"
       "Exit: 0 cleared, 2 bad input, 3 no valid plan, 4 the robot did not clear the obstacle.");
   registry.add(sub, [o] { return runDemo(*o); });

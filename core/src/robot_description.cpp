@@ -175,6 +175,7 @@ RobotDescription loadRobotDescriptionAt(const std::string& yaml_path, int depth)
 
   RobotDescription d;
   d.yaml_path = yaml_path;
+  d.robot_yaml = yaml_path;
   d.name = r.as<std::string>(r.need(root, "name", ""), "name");
   const std::string urdf = r.as<std::string>(r.need(root, "urdf", ""), "urdf");
   std::filesystem::path up(urdf);

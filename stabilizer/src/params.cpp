@@ -92,8 +92,9 @@ Params loadParams(const std::string& robot_yaml) {
     s.y_min = foot->yMin();
     s.y_max = foot->yMax();
   }
-  const YAML::Node root = core::YamlReader::loadFile(robot_yaml);
-  const core::YamlReader r(robot_yaml);
+  // An overlay (docs/model-overlay.md) holds no stabilizer section: the gains are the robot's.
+  const YAML::Node root = core::YamlReader::loadFile(d.robot_yaml);
+  const core::YamlReader r(d.robot_yaml);
   if (const YAML::Node st = root["stabilizer"]) {
     if (!st.IsMap()) r.fail("stabilizer", "expected a map");
     for (const auto& kv : st) {

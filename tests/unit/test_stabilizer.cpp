@@ -538,3 +538,31 @@ TEST(StabilizerParams, LoadsTheRobotSectionAndRefusesBadValues) {
             std::string::npos);
   EXPECT_THROW(st::Stabilizer{p}, overstep::InputError);  // mass 0
 }
+
+// A model overlay (docs/model-overlay.md) has no stabilizer section: the gains stay those of the
+// robot file at the bottom of its chain (they had silently fallen back to the defaults, which
+// turned the robot's disabled force-difference control on after `overstep identify`).
+TEST(StabilizerParams, AnOverlayKeepsTheRobotsGains) {
+  overstep::test::TempDir dir;
+  overstep::test::writeText(dir.path() / "hrp2.urdf",
+                            overstep::test::slurp(overstep::test::hrp2Urdf()));
+  std::string text = overstep::test::slurp(overstep::test::hrp2Yaml());
+  const auto pos = text.find("\nstabilizer:");
+  ASSERT_NE(pos, std::string::npos);
+  text = text.substr(0, pos + 1) +
+         "stabilizer:\n  damping_pitch: 25\n  force_difference_gain: 0.0\n  feedback: dcm\n";
+  overstep::test::writeText(dir.path() / "r.yaml", text);
+  overstep::test::writeText(dir.path() / "o1.yaml",
+                            "base: r.yaml\npayload:\n  - {link: CHEST_LINK1, mass: 1.5}\n");
+  overstep::test::writeText(dir.path() / "o2.yaml", "base: o1.yaml\ncommand: {delay: 0.01}\n");
+  const st::Params base = st::loadParams(dir.file("r.yaml"));
+  ASSERT_EQ(base.damping_pitch, 25.0);
+  ASSERT_NE(st::Params{}.force_difference_gain, 0.0) << "the test needs a non-default gain";
+  for (const char* overlay : {"o1.yaml", "o2.yaml"}) {
+    const st::Params p = st::loadParams(dir.file(overlay));
+    EXPECT_EQ(p.damping_pitch, 25.0) << overlay;
+    EXPECT_EQ(p.force_difference_gain, 0.0) << overlay;
+    EXPECT_EQ(p.feedback, st::Feedback::Dcm) << overlay;
+    EXPECT_EQ(p.sole[0].x_max, base.sole[0].x_max) << overlay;
+  }
+}

@@ -129,6 +129,9 @@ struct RobotDescription {
   std::uint64_t content_hash = 0;    ///< FNV-1a of the YAML and URDF file contents
   /// Overlays (a YAML with `base: FILE`): the base description's file, and the effects added.
   std::string base_yaml;
+  /// The robot file at the bottom of an overlay chain (yaml_path for a robot file): its
+  /// sections that overlays cannot change (the stabilizer's gains) are read from there.
+  std::string robot_yaml;
   ModelEffects effects;
 
   int actuatedIndex(const std::string& joint) const;           ///< -1 if absent
