@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -84,6 +85,28 @@ class PlanReader {
 };
 
 }  // namespace
+
+int Plan::sampleAt(double time, int which_phase) const {
+  const int n = samples();
+  if (n == 0) return -1;
+  if (!(time > t(0))) return 0;  // also NaN
+  const double* begin = t.data();
+  // First sample at or after `time`, and the one before it: the nearer of the two.
+  const int hi = static_cast<int>(std::lower_bound(begin, begin + n, time) - begin);
+  if (hi >= n) return n - 1;
+  int k = hi > 0 && time - t(hi - 1) < t(hi) - time ? hi - 1 : hi;
+  // Samples sharing k's time (a phase switch: the planner writes them 1 us apart): the one of
+  // the phase asked for, else the last.
+  constexpr double kSameTime = 1e-5;
+  int first = k, last = k;
+  while (first > 0 && t(k) - t(first - 1) <= kSameTime) --first;
+  while (last + 1 < n && t(last + 1) - t(k) <= kSameTime) ++last;
+  k = last;
+  if (which_phase >= 0)
+    for (int i = first; i <= last; ++i)
+      if (phase(i) == which_phase) k = i;
+  return k;
+}
 
 void Plan::resize(int n, int dofs, int actuated) {
   t.setZero(n);

@@ -123,7 +123,7 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
     Row r;
     r.t = t;
     r.phase = ref->phase;
-    r.index = std::clamp(static_cast<int>(std::lround(t * plan.rate)), 0, plan.samples() - 1);
+    r.index = plan.sampleAt(t, ref->phase);
     r.zmp_meas << st->zmp_measured[0], st->zmp_measured[1];
     r.zmp_ref << st->zmp_reference[0], st->zmp_reference[1];
     r.q_meas = Eigen::Map<const Eigen::VectorXd>(state->q.data(), nA);

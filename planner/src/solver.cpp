@@ -255,7 +255,8 @@ constexpr int kPolishIterations = 400;
 
 RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::VectorXd& x0,
                                      int max_iterations, const std::atomic<bool>* stop,
-                                     const std::function<void(const IterationInfo&)>& on_iter) {
+                                     const std::function<void(const IterationInfo&)>& on_iter,
+                                     double time_limit_s) {
   // Projected Levenberg-Marquardt on the violation residuals r = [max(0, g); h] (rows near
   // activity keep their Jacobians so the step does not break them). NLopt offers no
   // least-squares method; SLSQP started far from feasibility stalls (measured: docs/planner.md).
@@ -287,6 +288,10 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
     if (viol <= 0.1 * kFeasibilityTolerance) break;
     if (stop && stop->load()) {
       out.interrupted = true;
+      break;
+    }
+    if (!(std::chrono::duration<double>(Clock::now() - start).count() < time_limit_s)) {
+      out.timed_out = true;
       break;
     }
     problem.derivatives(x, e, grad, jin, jeq);
@@ -388,14 +393,16 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     stages.erase(stages.begin(), stages.end() - 1);
     problem.setDifficulty(stages.front().first, stages.front().second);
     if (on_stage) on_stage("warm start: restoring feasibility, then only the target stage");
-    const RestorationResult rest = restoreFeasibility(problem, x, 60, stop, on_restore);
+    const RestorationResult rest =
+        restoreFeasibility(problem, x, 60, stop, on_restore, time_limit_s - elapsed());
     x = rest.x;
     out.iterations += rest.iterations;
   } else {
     problem.setDifficulty(stages.front().first, stages.front().second);
     x = problem.initialGuess();
     if (on_stage) on_stage("restoring feasibility of the kinematic guess (Levenberg-Marquardt)");
-    const RestorationResult rest = restoreFeasibility(problem, x, 60, stop, on_restore);
+    const RestorationResult rest =
+        restoreFeasibility(problem, x, 60, stop, on_restore, time_limit_s - elapsed());
     x = rest.x;
     out.iterations += rest.iterations;
   }
@@ -415,7 +422,8 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     if (i > 0 && warm_start == nullptr) {
       // A harder stage starts infeasible (e.g. violations ~2 when the CoP box halves); SLSQP's
       // identity-Hessian steps from there wander (measured). Project back first.
-      const RestorationResult proj = restoreFeasibility(problem, x, 40, stop, on_restore);
+      const RestorationResult proj =
+          restoreFeasibility(problem, x, 40, stop, on_restore, time_limit_s - elapsed());
       out.iterations += proj.iterations;
       x = proj.x;
     }
@@ -465,14 +473,15 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
       // (they end at a tenth of the tolerance or when no step reduces the violations; on the
       // 20 cm run 30 steps ended at 0.013 and 150 at 0.0137, still descending; measured,
       // docs/planner.md).
-      const RestorationResult polish =
-          restoreFeasibility(problem, x, kPolishIterations, stop, on_restore);
+      const RestorationResult polish = restoreFeasibility(problem, x, kPolishIterations, stop,
+                                                          on_restore, time_limit_s - elapsed());
       out.iterations += polish.iterations;
       x = polish.x;
       problem.evaluate(x, out.final.evaluation);
       out.final.x = x;
       out.final.objective = out.final.evaluation.objective;
       out.final.max_violation = polish.max_violation;
+      if (polish.timed_out) out.final.status = "time_limit";
     }
   }
   if (out.final.x.size() == 0) {  // the time limit ended the solve before any stage ran

@@ -165,8 +165,7 @@ Identification identify(const Dataset& data, const core::Plan& plan,
   double spring[4] = {0.0, 0.0, 0.0, 0.0};  // bushing spring torques, N m (filtered moments)
   for (int k = 1; k + 1 < N; ++k) {
     const Record& r = data.records[static_cast<std::size_t>(k)];
-    const int s =
-        std::clamp(static_cast<int>(std::lround(r.plan_t * plan.rate)), 0, plan.samples() - 1);
+    const int s = plan.sampleAt(r.plan_t);
     // The measured motion: joints from the encoders (accelerations by backward differences over the
     // period the motor torque is averaged on), the
     // elastic joints at the plan's, and the floating base from the IMU (orientation, gyro rate

@@ -1,9 +1,12 @@
-// core: robot description loading/validation and the wrench/ZMP helpers.
+// core: robot description loading/validation, the wrench/ZMP helpers and plan sample lookup.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
+#include <vector>
 
 #include "overstep/core/error.hpp"
+#include "overstep/core/plan.hpp"
 #include "overstep/core/robot_description.hpp"
 #include "overstep/core/wrench.hpp"
 #include "test_util.hpp"
@@ -150,3 +153,54 @@ TEST(Wrench, TableCartZmpOfStaticComIsItsProjection) {
 
 }  // namespace
 }  // namespace overstep
+
+namespace overstep::core {
+namespace {
+
+// A plan at 200 Hz whose phase switches repeat the switch time (1 us apart, as the planner
+// writes them): three switches, so round(t * rate) would be three samples late at the end.
+Plan switchingPlan() {
+  Plan p;
+  std::vector<double> t;
+  std::vector<int> ph;
+  double now = 0.0;
+  for (int phase = 0; phase < 4; ++phase) {
+    if (phase > 0) now += 1e-6;  // the switch sample of the new phase
+    for (int i = 0; i < 40; ++i) {
+      t.push_back(now);
+      ph.push_back(phase);
+      if (i + 1 < 40) now += 0.005;
+    }
+  }
+  p.resize(static_cast<int>(t.size()), 1, 0);
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    p.t(static_cast<Eigen::Index>(k)) = t[k];
+    p.phase(static_cast<Eigen::Index>(k)) = ph[k];
+  }
+  return p;
+}
+
+TEST(Plan, SampleAtFindsEverySampleAcrossPhaseSwitches) {
+  const Plan p = switchingPlan();
+  for (int k = 0; k < p.samples(); ++k)
+    EXPECT_EQ(p.sampleAt(p.t(k), p.phase(k)), k) << "t " << p.t(k) << " phase " << p.phase(k);
+  // Between samples: the nearer one, never more than half a period away (the rate-based index
+  // was 3 samples = 15 ms off after the third switch).
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, p.duration());
+  for (int i = 0; i < 2000; ++i) {
+    const double t = u(rng);
+    const int k = p.sampleAt(t);
+    ASSERT_GE(k, 0);
+    EXPECT_LE(std::abs(p.t(k) - t), 0.5 * 0.005 + 1e-6) << t;
+  }
+  EXPECT_EQ(p.sampleAt(-1.0), 0);
+  EXPECT_EQ(p.sampleAt(std::nan("")), 0);
+  EXPECT_EQ(p.sampleAt(p.duration() + 1.0), p.samples() - 1);
+  // At a switch without a phase: the later sample (the new phase).
+  EXPECT_EQ(p.phase(p.sampleAt(p.t(40))), 1);
+  EXPECT_EQ(Plan{}.sampleAt(0.0), -1);
+}
+
+}  // namespace
+}  // namespace overstep::core

@@ -52,6 +52,33 @@ robots::WholeBodyModel* Problem::model_ = nullptr;
 OverstepProblem* Problem::problem_ = nullptr;
 Eigen::VectorXd* Problem::x_ = nullptr;
 
+// The restoration honours its time limit (the polish after a stage used to run up to 400 steps,
+// ~70 s, past the planner's limit): none left -> no step, the start returned (inside the bounds),
+// and with time left it takes steps and lowers the violation.
+TEST_F(Problem, RestorationStopsAtItsTimeLimit) {
+  PlannerConfig off;
+  off.passive_polish = 0.0;
+  off.swept_clearance = 0.0;
+  core::ObstacleSpec ob;
+  ob.height = 0.05;
+  OverstepProblem raw(*model_, off, ob);
+  const double v0 = restoreFeasibility(raw, *x_, 0, nullptr, nullptr).max_violation;
+  ASSERT_GT(v0, 0.1 * kFeasibilityTolerance) << "the guess must need restoring for this test";
+  for (const double limit : {0.0, -1.0}) {
+    const RestorationResult none = restoreFeasibility(raw, *x_, 40, nullptr, nullptr, limit);
+    EXPECT_EQ(none.iterations, 0) << limit;
+    EXPECT_TRUE(none.timed_out) << limit;
+    EXPECT_EQ(none.max_violation, v0) << limit;
+    Eigen::VectorXd lo, hi;
+    raw.bounds(lo, hi);
+    EXPECT_TRUE(none.x.isApprox(x_->cwiseMax(lo).cwiseMin(hi)));
+  }
+  const RestorationResult some = restoreFeasibility(raw, *x_, 3, nullptr, nullptr, 600.0);
+  EXPECT_FALSE(some.timed_out);
+  EXPECT_GE(some.iterations, 1);
+  EXPECT_LT(some.max_violation, v0);
+}
+
 TEST_F(Problem, LayoutAndRowFamiliesAreConsistent) {
   const auto& lay = problem_->layout();
   EXPECT_EQ(lay.total, 5 + 6 + 16 * lay.free_cp);

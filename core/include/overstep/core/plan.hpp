@@ -51,6 +51,11 @@ struct Plan {
   Eigen::MatrixXd left_wrench;    ///< 6 x N
 
   int samples() const { return static_cast<int>(t.size()); }
+  /// The sample nearest to time `t` (clamped to the plan). The samples are not evenly spaced: a
+  /// phase switch adds its own time off the grid, once per phase (1 us apart), so round(t * rate)
+  /// falls behind by two or three samples per switch. At a switch the sample of `phase` is taken
+  /// when given (>= 0), else the later one. -1 for an empty plan.
+  int sampleAt(double t, int phase = -1) const;
   double duration() const { return t.size() ? t(t.size() - 1) : 0.0; }
   /// Resizes every sample array for n samples of `dofs` coordinates, `actuated` joints.
   void resize(int n, int dofs, int actuated);

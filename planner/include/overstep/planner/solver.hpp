@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 
@@ -66,12 +67,16 @@ struct RestorationResult {
   int iterations = 0;
   double max_violation = 0.0;
   bool interrupted = false;
+  bool timed_out = false;  ///< stopped by its time limit
 };
 
-/// Drives x toward feasibility (least squares on the violations, bounds respected).
+/// Drives x toward feasibility (least squares on the violations, bounds respected). Stops after
+/// `max_iterations` steps, on `stop`, or once `time_limit_s` of wall time has passed (checked
+/// before each step; <= 0: no step at all).
 RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::VectorXd& x0,
                                      int max_iterations, const std::atomic<bool>* stop,
-                                     const std::function<void(const IterationInfo&)>& on_iter);
+                                     const std::function<void(const IterationInfo&)>& on_iter,
+                                     double time_limit_s = std::numeric_limits<double>::infinity());
 
 /// Runs the homotopy from the kinematic guess (after a feasibility restoration) to the target
 /// obstacle and CoP box; with `warm_start` (a solution vector of this problem's layout, e.g. a
