@@ -20,10 +20,16 @@ class Problem : public ::testing::Test {
     core::ObstacleSpec ob;
     ob.height = 0.05;
     problem_ = new OverstepProblem(*model_, PlannerConfig{}, ob);
+    // The problem without the polish and the swept clearance (for the restorations below).
+    PlannerConfig off;
+    off.passive_polish = 0.0;
+    off.swept_clearance = 0.0;
+    raw_ = new OverstepProblem(*model_, off, ob);
     x_ = new Eigen::VectorXd(problem_->initialGuess());
   }
   static void TearDownTestSuite() {
     delete x_;
+    delete raw_;
     delete problem_;
     delete model_;
   }
@@ -32,13 +38,7 @@ class Problem : public ::testing::Test {
   /// reachable (the transfer's trailing ankle beyond its limit), which the joint-limit rows report.
   static const Eigen::VectorXd& restored() {
     static const Eigen::VectorXd x = [] {
-      PlannerConfig off;
-      off.passive_polish = 0.0;
-      off.swept_clearance = 0.0;
-      core::ObstacleSpec ob;
-      ob.height = 0.05;
-      OverstepProblem raw(*model_, off, ob);
-      const RestorationResult rest = restoreFeasibility(raw, *x_, 40, nullptr, nullptr);
+      const RestorationResult rest = restoreFeasibility(*raw_, *x_, 40, nullptr, nullptr);
       EXPECT_LT(rest.max_violation, 0.5);
       return rest.x;
     }();
@@ -46,22 +46,19 @@ class Problem : public ::testing::Test {
   }
   static robots::WholeBodyModel* model_;
   static OverstepProblem* problem_;
+  static OverstepProblem* raw_;
   static Eigen::VectorXd* x_;
 };
 robots::WholeBodyModel* Problem::model_ = nullptr;
 OverstepProblem* Problem::problem_ = nullptr;
+OverstepProblem* Problem::raw_ = nullptr;
 Eigen::VectorXd* Problem::x_ = nullptr;
 
 // The restoration honours its time limit (the polish after a stage used to run up to 400 steps,
 // ~70 s, past the planner's limit): none left -> no step, the start returned (inside the bounds),
 // and with time left it takes steps and lowers the violation.
 TEST_F(Problem, RestorationStopsAtItsTimeLimit) {
-  PlannerConfig off;
-  off.passive_polish = 0.0;
-  off.swept_clearance = 0.0;
-  core::ObstacleSpec ob;
-  ob.height = 0.05;
-  OverstepProblem raw(*model_, off, ob);
+  OverstepProblem& raw = *raw_;
   const double v0 = restoreFeasibility(raw, *x_, 0, nullptr, nullptr).max_violation;
   ASSERT_GT(v0, 0.1 * kFeasibilityTolerance) << "the guess must need restoring for this test";
   for (const double limit : {0.0, -1.0}) {
