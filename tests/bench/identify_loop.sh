@@ -45,7 +45,10 @@ try:
 except ValueError:
     print("seed %s: the loop failed (exit %s)" % (seed, code)); sys.exit(0)
 r = json.load(open(ref_file))
-b, a, p = d["before"], d["after"], d["identify"]["parameters"]
+b, a, p = d["before"], d["after"], d["identify"].get("parameters", {})
+if not a:  # verdict none / unexplained: nothing was added to the model, no second run
+    print("seed %s: %s, no run after (exit %s)" % (seed, d["identify"].get("verdict"), code))
+    sys.exit(0)
 print("seed %s: %s %s, mass %.3f kg, m c = (%.3f, %.3f, %.3f) kg m | tracking %.2f -> %.2f mrad "
       "(%+.0f %%), effort %.4f -> %.4f (%+.0f %%), cleared %s -> %s | no payload %.2f mrad / %.4f "
       "| %.0f s" % (
