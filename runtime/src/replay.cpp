@@ -144,13 +144,18 @@ const TickOutput& Replay::tick(const core::RobotState* state) {
       have_state_ = true;
       missed_ = 0;
     }
-  } else if (have_state_ && ++missed_ >= opt_.watchdog_periods) {
-    enterHold(FaultReason::NoState);
+  } else if (have_state_) {
+    ++missed_;
+    // The watchdog guards the commands. Before the first one (Idle) a robot whose states pause
+    // only delays the start: holding there protected nothing, yet a startup stall of the robot's
+    // state stream ended the run before it began.
+    if (out_.state != State::Idle && missed_ >= opt_.watchdog_periods)
+      enterHold(FaultReason::NoState);
   }
 
   switch (out_.state) {
     case State::Idle:
-      if (move_ready_) {
+      if (move_ready_ && missed_ == 0) {  // the first command answers a state of this tick
         move_k_ = 0;
         out_.state = State::MovingToStart;
       }

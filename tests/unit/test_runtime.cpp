@@ -302,6 +302,26 @@ TEST_F(RuntimeTest, WatchdogHoldsAfterThreeMissedPeriods) {
   EXPECT_EQ(r.fault(), FaultReason::NoState);
 }
 
+TEST_F(RuntimeTest, StatesPausingBeforeTheFirstCommandOnlyDelayTheStart) {
+  runtime::PlanTrack track(*plan_, *model_);
+  runtime::Replay r(track, params(), fastOptions());
+  core::RobotState st = perfectState(*plan_, 0);
+  r.start();
+  tickP(r, &st);  // the first state: the move to the start is planned from it
+  // The robot's states pause for ten periods: nothing is commanded, nothing faults.
+  for (int i = 0; i < 10; ++i) {
+    const auto& out = tickP(r, nullptr);
+    EXPECT_EQ(out.state, State::Idle);
+    EXPECT_FALSE(out.send_command);
+  }
+  EXPECT_EQ(r.fault(), FaultReason::None);
+  // The next state starts the move; from then on the watchdog guards the commands.
+  EXPECT_EQ(tickP(r, &st).state, State::MovingToStart);
+  for (int i = 0; i < 2; ++i) EXPECT_EQ(tickP(r, nullptr).state, State::MovingToStart);
+  EXPECT_EQ(tickP(r, nullptr).state, State::Hold);
+  EXPECT_EQ(r.fault(), FaultReason::NoState);
+}
+
 TEST_F(RuntimeTest, BadStatesFaultAndHold) {
   runtime::PlanTrack track(*plan_, *model_);
   const core::RobotState good = perfectState(*plan_, 0);
