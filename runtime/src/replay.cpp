@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "overstep/core/error.hpp"
 
@@ -145,7 +146,7 @@ const TickOutput& Replay::tick(const core::RobotState* state) {
       missed_ = 0;
     }
   } else if (have_state_) {
-    ++missed_;
+    if (missed_ < std::numeric_limits<int>::max()) ++missed_;  // an idle wait may be long
     // The watchdog guards the commands. Before the first one (Idle) a robot whose states pause
     // only delays the start: holding there protected nothing, yet a startup stall of the robot's
     // state stream ended the run before it began.
