@@ -149,9 +149,11 @@ TEST_F(ReplayLcm, KillingTheSimulatorHoldsWithinThreePeriods) {
       const bool stalled = sim_alive && last() &&
                            last()->state == overstep::runtime_status_t::STATE_HOLD &&
                            last()->fault_reason.find("no robot state") != std::string::npos;
-      kill(sim, SIGKILL);
+      if (sim_alive) {  // an exited simulator was reaped above
+        kill(sim, SIGKILL);
+        test::waitOverstep(sim, 10);
+      }
       kill(replay, SIGKILL);
-      test::waitOverstep(sim, 10);
       test::waitOverstep(replay, 10);
       const std::string why =
           "attempt " + tag + ": the replay did not reach running; last status: " +
