@@ -23,6 +23,7 @@
 #include "overstep/cli/command.hpp"
 #include "overstep/core/error.hpp"
 #include "overstep/core/plan.hpp"
+#include "overstep/core/robot_description.hpp"
 
 namespace overstep {
 namespace {
@@ -116,9 +117,9 @@ std::string utcStamp() {
   return buf;
 }
 
-std::string hex(std::size_t h) {
+std::string hex(std::uint64_t h) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%016zx", h);
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
   return buf;
 }
 
@@ -140,10 +141,13 @@ json demoRun(const DemoOptions& o, const fs::path& run) {
                                             "--obstacle-shape",  o.shape,
                                             "--obstacle-gap",    std::to_string(o.gap),
                                             "--margin",          std::to_string(o.margin)};
-  std::string key_text = readAll(o.robot) + "|" + (o.config.empty() ? "" : readAll(o.config));
+  // The key covers the plan format (a cached plan of an older format would be refused) and is a
+  // fixed function of its text (FNV-1a, not std::hash: stable across builds and libraries).
+  std::string key_text = "format " + std::to_string(core::Plan::kFormatVersion) + "|" +
+                         readAll(o.robot) + "|" + (o.config.empty() ? "" : readAll(o.config));
   for (const auto& a : obstacle_args) key_text += "|" + a;
   if (!o.warm_start.empty()) key_text += "|warm|" + readAll(o.warm_start);
-  const std::string key = hex(std::hash<std::string>{}(key_text));
+  const std::string key = hex(core::fnv1a64(key_text));
   const fs::path plan_file = cache / ("plan-" + key + ".json");
   const fs::path failed_file = cache / ("plan-" + key + ".failed.json");
   bool plan_valid = false;

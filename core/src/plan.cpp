@@ -204,9 +204,15 @@ Plan loadPlan(const std::string& path) {
   PlanReader r(path, j);
   if (!j.is_object() || !j.contains("format") || j["format"] != "overstep-plan")
     r.fail("format", "expected \"overstep-plan\"");
-  if (!j.contains("version") || !j["version"].is_number_integer() ||
-      j["version"].get<int>() != Plan::kFormatVersion)
-    r.fail("version", "expected " + std::to_string(Plan::kFormatVersion));
+  if (!j.contains("version") || !j["version"].is_number_integer())
+    r.fail("version", "expected the integer " + std::to_string(Plan::kFormatVersion));
+  if (j["version"] == 1)
+    r.fail("version",
+           "1 is no longer read: its torques leave out the contact forces (re-plan it with this "
+           "overstep)");
+  if (j["version"] != Plan::kFormatVersion)
+    r.fail("version",
+           "expected " + std::to_string(Plan::kFormatVersion) + ", got " + j["version"].dump());
   Plan p;
   const json& robot = r.need(j, "robot", "");
   p.robot_name = r.text(robot, "name", "robot.");

@@ -18,6 +18,7 @@
 #include "overstep/monitor/lcm_log.hpp"
 #include "overstep/monitor/messages.hpp"
 #include "overstep/robots/collision.hpp"
+#include "overstep/robots/leg.hpp"
 #include "overstep/robots/whole_body_model.hpp"
 #include "overstep/runtime/plan_track.hpp"
 
@@ -26,10 +27,6 @@ namespace overstep::monitor {
 namespace fs = std::filesystem;
 
 namespace {
-
-const char* const kLegJoints[12] = {"RLEG_JOINT0", "RLEG_JOINT1", "RLEG_JOINT2", "RLEG_JOINT3",
-                                    "RLEG_JOINT4", "RLEG_JOINT5", "LLEG_JOINT0", "LLEG_JOINT1",
-                                    "LLEG_JOINT2", "LLEG_JOINT3", "LLEG_JOINT4", "LLEG_JOINT5"};
 
 using core::rollPitch;
 
@@ -87,12 +84,13 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
   const auto& d = model.description();
   const int nA = model.actuatedCount();
   const double mg = model.totalMass() * d.gravity;
+  // The legs' joints (right, then left; hip to ankle) from the kinematic tree.
   std::array<int, 12> leg{};
-  for (int i = 0; i < 12; ++i) {
-    leg[static_cast<std::size_t>(i)] = d.actuatedIndex(kLegJoints[i]);
-    if (leg[static_cast<std::size_t>(i)] < 0)
-      throw InputError(std::string("robot lacks ") + kLegJoints[i]);
-  }
+  const std::vector<robots::LegChain> chains = robots::legChains(model);
+  if (chains.size() != 2) throw InputError("the report needs a robot with two legs");
+  for (int i = 0; i < 12; ++i)
+    leg[static_cast<std::size_t>(i)] =
+        chains[static_cast<std::size_t>(i / 6)].actuated[static_cast<std::size_t>(i % 6)];
   const int base_frame = model.frameIndex(d.base_link);
   std::vector<int> cap_frames;
   for (const auto& c : d.capsules) cap_frames.push_back(model.frameIndex(c.link));
@@ -178,8 +176,10 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
     csv += std::string(",") + s + "_cop_x_plan," + s + "_cop_y_plan," + s + "_cop_x_meas," + s +
            "_cop_y_meas," + s + "_contact";
   }
-  for (const char* j : kLegJoints)
-    csv += std::string(",") + j + "_plan," + j + "_cmd," + j + "_meas";
+  for (int a : leg) {
+    const std::string& j = d.actuated[static_cast<std::size_t>(a)].name;
+    csv += "," + j + "_plan," + j + "_cmd," + j + "_meas";
+  }
   csv += "\n";
   Eigen::VectorXd qm;
   char buf[64];

@@ -90,6 +90,18 @@ int runPlan(const PlanOptions& o) {
                           " m is beyond the swing foot's reach (about " +
                           std::to_string(kReachableHeight) + " m for this robot): no plan exists");
   }
+  {
+    // The landing heel must clear the bar's far face: a bar wider than the longest step allows
+    // has no plan (answered at once; the solver would search until its time limit).
+    const auto& sole = model.description().foot("right")->sole;
+    const double toes_x = model.description().foot("left")->sole.x_front;
+    const double needed = ob.farX(toes_x) + cfg.obstacle_clearance + sole.x_back;
+    if (needed > cfg.step_length_max) {
+      throw InfeasibleError("a step over this bar needs at least " + std::to_string(needed) +
+                            " m, beyond step_length_max " + std::to_string(cfg.step_length_max) +
+                            " m: no plan exists");
+    }
+  }
   planner::OverstepProblem problem(model, cfg, ob);
   Eigen::VectorXd warm;
   if (!o.warm_start.empty()) {

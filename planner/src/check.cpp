@@ -8,6 +8,7 @@
 #include "overstep/core/rotation.hpp"
 #include "overstep/core/wrench.hpp"
 #include "overstep/robots/collision.hpp"
+#include "overstep/robots/leg.hpp"
 
 namespace overstep::planner {
 namespace {
@@ -78,15 +79,19 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
   std::vector<int> cap_frame;
   for (const auto& c : d.capsules) cap_frame.push_back(model.frameIndex(c.link));
 
-  // Every capsule of the legs' thighs, shanks and feet; self-collision: right leg vs left leg.
+  // Every capsule of the legs' thighs, shanks and feet (the children of the hip pitch and knee
+  // joints, and the foot, from the kinematic tree); self-collision: right leg vs left leg.
   std::vector<int> leg_caps, side_caps[2];
-  for (int f = 0; f < 2; ++f)
-    for (const char* l : {"LINK2", "LINK3", "FOOT"})
+  const std::vector<robots::LegChain> legs = robots::legChains(model);
+  for (int f = 0; f < 2 && f < static_cast<int>(legs.size()); ++f) {
+    const robots::LegChain& c = legs[static_cast<std::size_t>(f)];
+    for (const std::string& l : {c.links[2], c.links[3], c.foot_link})
       for (std::size_t i = 0; i < d.capsules.size(); ++i)
-        if (d.capsules[i].link == std::string(f == 0 ? "RLEG_" : "LLEG_") + l) {
+        if (d.capsules[i].link == l) {
           leg_caps.push_back(static_cast<int>(i));
           side_caps[f].push_back(static_cast<int>(i));
         }
+  }
   std::vector<std::pair<int, int>> pairs;
   for (int a : side_caps[0])
     for (int b : side_caps[1]) pairs.emplace_back(a, b);
@@ -146,14 +151,13 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
     const core::Vector6d res = W - sum;
     dyn.add(res.head<3>().cwiseAbs().maxCoeff(), t, "base moment");
     dyn.add(res.tail<3>().cwiseAbs().maxCoeff(), t, "base force");
-    for (int f = 0; f < 2; ++f) {
-      const Eigen::MatrixXd J = model.frameJacobian(sole[f]);
-      for (int e = 0; e < 2; ++e) {
-        const int c = model.elasticCoordinate(2 * f + e);
-        const double r = tau(c) - J.col(c).dot(w[f]);
-        dyn.add(std::abs(r), t, d.elastic[static_cast<std::size_t>(2 * f + e)].name);
-      }
-    }
+    // The robot in contact: actuator torques and the bushings' residual are what inverse
+    // dynamics leaves after the feet's wrenches (J^T w), not the torques of a robot hanging
+    // from its pelvis.
+    const Eigen::VectorXd tau_c = model.torquesInContact(tau, {{sole[0], w[0]}, {sole[1], w[1]}});
+    for (int e = 0; e < model.elasticCount(); ++e)
+      dyn.add(std::abs(tau_c(model.elasticCoordinate(e))), t,
+              d.elastic[static_cast<std::size_t>(e)].name);
     for (int f = 0; f < 2; ++f) {
       const std::string side = f == 0 ? "right" : "left";
       if (contact[f]) {
@@ -200,7 +204,7 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
       const int c = model.actuatedCoordinate(j);
       lim.add(std::max(q(c) - aj.safeUpper(), aj.safeLower() - q(c)), t, aj.name);
       vel.add(std::abs(v(c)) / aj.velocity - 1.0, t, aj.name);
-      trq.add(std::abs(tau(c)) / aj.torque - 1.0, t, aj.name);
+      trq.add(std::abs(tau_c(c)) / aj.torque - 1.0, t, aj.name);
     }
     const Eigen::Matrix3d R = model.framePose(base).linear();
     pel.add(std::abs(core::rollOf(R)) - tilt, t, "roll");

@@ -31,7 +31,7 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
   x.segment<2>(lay.feet + 4) = L1;
 
   const PhaseTiming timing(x.head(kPhaseCount));
-  PhaseSpline spline(c.spline_intervals, c.spline_degree);
+  PhaseSpline spline(c.spline_intervals);
   spline.setTiming(timing);
   robots::WholeBodyModel& model = *m.ws.front().model;
   const double z_rest = m.q_rest(5);

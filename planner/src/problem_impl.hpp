@@ -21,6 +21,7 @@
 #include "overstep/core/wrench.hpp"
 #include "overstep/planner/spline.hpp"
 #include "overstep/robots/collision.hpp"
+#include "overstep/robots/leg.hpp"
 
 namespace overstep::planner {
 namespace detail {
@@ -82,8 +83,9 @@ struct SampleOut {
 
 /// The full state of the robot at one instant, and the contact wrenches.
 struct State {
-  Eigen::VectorXd q, v, a, tau;
-  core::Vector6d wrench[2];  // [torque; force] about each sole origin, world frame
+  Eigen::VectorXd q, v, a, tau;  // tau: inverse dynamics without contacts (all coordinates)
+  Eigen::VectorXd tau_act;       // actuator torques in contact (seed eq. 1; stateFrom only)
+  core::Vector6d wrench[2];      // [torque; force] about each sole origin, world frame
   bool contact[2] = {false, false};
   Eigen::Isometry3d sole[2];
   core::Vector6d W_O;  // total contact wrench about the world origin
@@ -115,8 +117,9 @@ struct OverstepProblem::Impl {
   std::array<int, 12> leg_act{};    // actuated indices
   std::array<int, 4> flex_coord{};  // RLEG roll, pitch, LLEG roll, pitch
   int sole_frame[2]{};
-  int hip_frame[2]{};    // hip pitch link origin (LINK2) per leg
-  int ankle_frame[2]{};  // ankle link origin (LINK4) per leg
+  int hip_frame[2]{};                       // hip pitch link origin per leg (reach)
+  int ankle_frame[2]{};                     // ankle pitch link origin per leg (reach)
+  std::array<std::string, 3> leg_links[2];  // thigh, shank and foot bodies per leg
   int head_frame = -1;
   int base_frame = -1;
   core::FootDescription foot[2];
@@ -133,8 +136,8 @@ struct OverstepProblem::Impl {
   static constexpr int kEvents = 4;
   int event_eq_off[kEvents]{};
   int event_eq_cnt[kEvents]{};
-  // Per phase, the foot whose placement fixes the floating base (phaseTable(), the transfer's
-  // from transfer_anchor). At a switch the leg changing representation (double-support inverse
+  // Per phase, the foot whose placement fixes the floating base (phaseTable()). At a switch the
+  // leg changing representation (double-support inverse
   // kinematics <-> spline) is that double-support phase's other leg.
   int anchor_of[kPhaseCount]{};
 
@@ -163,30 +166,31 @@ struct OverstepProblem::Impl {
     if (model_template.baseDofs() != 6 || d.feet.size() != 2) {
       throw InputError("planner: needs a floating-base robot with two feet");
     }
-    const char* legs[12] = {"RLEG_JOINT0", "RLEG_JOINT1", "RLEG_JOINT2", "RLEG_JOINT3",
-                            "RLEG_JOINT4", "RLEG_JOINT5", "LLEG_JOINT0", "LLEG_JOINT1",
-                            "LLEG_JOINT2", "LLEG_JOINT3", "LLEG_JOINT4", "LLEG_JOINT5"};
-    for (int i = 0; i < 12; ++i) {
-      const int a = d.actuatedIndex(legs[i]);
-      if (a < 0) throw InputError(std::string("planner: robot lacks joint ") + legs[i]);
-      leg_act[static_cast<std::size_t>(i)] = a;
-      leg_coord[static_cast<std::size_t>(i)] = model_template.actuatedCoordinate(a);
-    }
-    const char* flex[4] = {"RLEG_ELASTIC_ROLL", "RLEG_ELASTIC_PITCH", "LLEG_ELASTIC_ROLL",
-                           "LLEG_ELASTIC_PITCH"};
-    for (int i = 0; i < 4; ++i) {
-      const int e = d.elasticIndex(flex[i]);
-      if (e < 0) throw InputError(std::string("planner: robot lacks elastic joint ") + flex[i]);
-      flex_coord[static_cast<std::size_t>(i)] = model_template.elasticCoordinate(e);
+    // The legs from the kinematic tree (right, left): joints hip to ankle, then the bushing's
+    // roll and pitch below the ankle.
+    const std::vector<robots::LegChain> legs = robots::legChains(model_template);
+    if (legs.size() != 2 || legs[kRight].side != "right" || legs[kLeft].side != "left")
+      throw InputError("planner: needs a right and a left leg, in that order");
+    for (int f = 0; f < 2; ++f) {
+      const robots::LegChain& c = legs[static_cast<std::size_t>(f)];
+      if (c.elastic.size() != 2)
+        throw InputError("planner: the " + c.side + " ankle needs a roll and a pitch bushing");
+      for (int j = 0; j < 6; ++j) {
+        const int a = c.actuated[static_cast<std::size_t>(j)];
+        leg_act[static_cast<std::size_t>(6 * f + j)] = a;
+        leg_coord[static_cast<std::size_t>(6 * f + j)] = model_template.actuatedCoordinate(a);
+      }
+      for (int e = 0; e < 2; ++e)
+        flex_coord[static_cast<std::size_t>(2 * f + e)] =
+            model_template.elasticCoordinate(c.elastic[static_cast<std::size_t>(e)]);
+      // Reach: hip pitch link to ankle pitch link (children of the third and fifth joints).
+      hip_frame[f] = model_template.frameIndex(c.links[2]);
+      ankle_frame[f] = model_template.frameIndex(c.links[4]);
+      leg_links[f] = {c.links[2], c.links[3], c.foot_link};  // thigh, shank, foot
     }
     foot[kRight] = *d.foot("right");
     foot[kLeft] = *d.foot("left");
-    for (int f = 0; f < 2; ++f) {
-      sole_frame[f] = model_template.frameIndex(foot[f].sole_frame);
-      const std::string p = f == kRight ? "RLEG_" : "LLEG_";
-      hip_frame[f] = model_template.frameIndex(p + "LINK2");
-      ankle_frame[f] = model_template.frameIndex(p + "LINK4");
-    }
+    for (int f = 0; f < 2; ++f) sole_frame[f] = model_template.frameIndex(foot[f].sole_frame);
     head_frame = model_template.hasFrame("head") ? model_template.frameIndex("head") : -1;
     base_frame = model_template.frameIndex(d.base_link);
     mass = model_template.totalMass();
@@ -200,23 +204,20 @@ struct OverstepProblem::Impl {
         if (caps[i].link == link) return static_cast<int>(i);
       return -1;
     };
-    for (int f = 0; f < 2; ++f) {
-      const std::string p = f == kRight ? "RLEG_" : "LLEG_";
-      for (const char* l : {"LINK2", "LINK3", "FOOT"})  // every capsule of these links
+    for (int f = 0; f < 2; ++f)
+      for (const std::string& l : leg_links[f])  // every capsule of the thigh, shank and foot
         for (std::size_t i = 0; i < caps.size(); ++i)
-          if (caps[i].link == p + l) leg_caps[f].push_back(static_cast<int>(i));
-    }
+          if (caps[i].link == l) leg_caps[f].push_back(static_cast<int>(i));
     // Self-collision pairs that a stepping motion can bring together: legs with each other and
     // the hanging arms with the thighs.
     for (int a : leg_caps[kRight])
       for (int b : leg_caps[kLeft]) self_pairs.emplace_back(a, b);
-    for (const char* arm : {"RARM_LINK3", "RARM_LINK6"}) {
-      const int a = capIndex(arm), b = capIndex("RLEG_LINK2");
-      if (a >= 0 && b >= 0) self_pairs.emplace_back(a, b);
-    }
-    for (const char* arm : {"LARM_LINK3", "LARM_LINK6"}) {
-      const int a = capIndex(arm), b = capIndex("LLEG_LINK2");
-      if (a >= 0 && b >= 0) self_pairs.emplace_back(a, b);
+    for (int f = 0; f < 2; ++f) {
+      const std::string arm = f == kRight ? "RARM_" : "LARM_";
+      for (const std::string& l : {arm + "LINK3", arm + "LINK6"}) {  // forearm, hand
+        const int a = capIndex(l), b = capIndex(leg_links[f][0]);
+        if (a >= 0 && b >= 0) self_pairs.emplace_back(a, b);
+      }
     }
     {
       robots::WholeBodyModel tmp(model_template);
@@ -226,7 +227,7 @@ struct OverstepProblem::Impl {
     cop_box = cfg.cop_box;
     obstacle_geom = robots::ObstacleGeometry::fromSpec(obstacle, toes_x);
 
-    PhaseSpline probe(cfg.spline_intervals, cfg.spline_degree);
+    PhaseSpline probe(cfg.spline_intervals);
     n_ctrl = probe.controlPointCount();
     lay.free_cp = n_ctrl - 4;
     if (lay.free_cp < 2) throw InputError("planner: spline_intervals too small");
@@ -246,40 +247,14 @@ struct OverstepProblem::Impl {
       const int nph = cfg.samples_per_phase[static_cast<std::size_t>(i)];
       const auto& ph = phaseTable()[static_cast<std::size_t>(i)];
       const bool closed = !(ph.right_contact && ph.left_contact) || i + 1 == kPhaseCount;
-      for (int k = 0; k <= (closed ? nph : nph - 1); ++k) {
-        // Approach sample: half an interval before a lift-off or a touchdown, where the
-        // unloading foot's CoP and the landing sole's corners otherwise go unsampled (measured:
-        // 1 cm of CoP beyond the box in the last 15 ms before lift-off, 1 mm of corner below the
-        // ground before touchdown). Constraint rows only (no objective weight).
-        if (cfg.approach_samples > 0.0 && k == nph - 1 && i + 1 < kPhaseCount)
-          grid.push_back({i, (nph - 0.5) / nph, 0.0});
-        if (k < nph || closed) grid.push_back({i, static_cast<double>(k) / nph, 0.0});
-      }
+      for (int k = 0; k <= (closed ? nph : nph - 1); ++k)
+        grid.push_back({i, static_cast<double>(k) / nph, 0.0});
     }
-    std::stable_sort(grid.begin(), grid.end(), [](const GridPoint& x, const GridPoint& y) {
-      return x.phase != y.phase ? x.phase < y.phase : x.s < y.s;
-    });
     for (const auto& g : grid) {
       const auto& ph = phaseTable()[static_cast<std::size_t>(g.phase)];
       const bool ds = ph.right_contact && ph.left_contact;
       ineq_off.push_back(n_ineq);
       eq_off.push_back(n_eq);
-      if (isApproach(g)) {
-        // Few rows (full rows there stalled SLSQP; measured): before a lift-off the sway
-        // balance, before a touchdown the landing sole's corners.
-        if (ds && cfg.ds_balance_band > 0.0) {
-          for (int r = 0; r < 2; ++r) ineq_fam.push_back(Family::Dynamics);
-        } else if (ds) {
-          eq_fam.push_back(Family::Dynamics);
-        } else {
-          for (int r = 0; r < 4; ++r) ineq_fam.push_back(Family::Clearance);
-        }
-        ineq_cnt.push_back(static_cast<int>(ineq_fam.size()) - n_ineq);
-        eq_cnt.push_back(static_cast<int>(eq_fam.size()) - n_eq);
-        n_ineq = static_cast<int>(ineq_fam.size());
-        n_eq = static_cast<int>(eq_fam.size());
-        continue;
-      }
       const int contacts = ds ? 2 : 1;
       for (int c = 0; c < contacts; ++c) {
         for (int r = 0; r < 4; ++r) ineq_fam.push_back(Family::CoP);
@@ -296,10 +271,9 @@ struct OverstepProblem::Impl {
       if (ds) {
         for (int r = 0; r < 12; ++r) ineq_fam.push_back(Family::JointLimits);
         ineq_fam.push_back(Family::Reach);
-        if (cfg.ds_balance_band > 0.0)
-          for (int r = 0; r < 2; ++r) ineq_fam.push_back(Family::Dynamics);
+        for (int r = 0; r < 2; ++r) ineq_fam.push_back(Family::Dynamics);  // sway balance band
       }
-      const int dyn_eq = ds ? (cfg.ds_balance_band > 0.0 ? 0 : 1) : 4;
+      const int dyn_eq = ds ? 0 : 4;
       for (int r = 0; r < dyn_eq; ++r) eq_fam.push_back(Family::Dynamics);
       ineq_cnt.push_back(static_cast<int>(ineq_fam.size()) - n_ineq);
       eq_cnt.push_back(static_cast<int>(eq_fam.size()) - n_eq);
@@ -310,13 +284,7 @@ struct OverstepProblem::Impl {
       anchor_of[i] =
           phaseTable()[static_cast<std::size_t>(i)].base_foot == Foot::Right ? kRight : kLeft;
     // The landed right foot carries the transfer (phaseTable()): at its touchdown the left leg
-    // goes from spline to inverse kinematics, and back at its lift-off. With "left" the lifting
-    // foot does, and the right leg changes representation at both ends of the transfer.
-    if (cfg.transfer_anchor == "left") {
-      anchor_of[2] = kLeft;
-    } else if (cfg.transfer_anchor != "right") {
-      throw InputError("planner: transfer_anchor: expected right or left");
-    }
+    // goes from spline to inverse kinematics, and back at its lift-off.
     for (int e = 0; e < kEvents; ++e) {
       event_eq_off[e] = n_eq;
       for (int r = 0; r < 12; ++r) eq_fam.push_back(Family::Switching);
@@ -331,14 +299,8 @@ struct OverstepProblem::Impl {
     ws.resize(static_cast<std::size_t>(threads));
     for (auto& w : ws) {
       w.model = std::make_unique<robots::WholeBodyModel>(model_template);
-      w.spline = std::make_unique<PhaseSpline>(cfg.spline_intervals, cfg.spline_degree);
+      w.spline = std::make_unique<PhaseSpline>(cfg.spline_intervals);
     }
-  }
-
-  /// An approach sample: half an interval before a lift-off or a touchdown (see setUp()).
-  bool isApproach(const GridPoint& g) const {
-    const int nph = cfg.samples_per_phase[static_cast<std::size_t>(g.phase)];
-    return std::abs(g.s * nph - std::round(g.s * nph)) > 1e-9;
   }
 
   // -------------------------------------------------------------- decoding x
@@ -426,8 +388,19 @@ struct OverstepProblem::Impl {
     distributeWrench(w);
   }
 
-  /// Inverse kinematics of the non-anchor leg onto its placement (base fixed by the anchor), then
-  /// its velocities and accelerations from the foot's zero velocity and acceleration.
+  /// Actuator torques of the robot in contact (seed eq. 1): the actuated rows of inverse dynamics
+  /// minus the feet's J^T w, for the plan file (and so for `overstep check`, which accepts a plan
+  /// only within the torque limits). The solve's torque-limit row and torque-rate term (eq. 27)
+  /// still use inverse dynamics without the contacts: with these torques the solve took other
+  /// paths, more than twice as long (docs/planner.md, Status).
+  void contactTorques(Workspace& w) const {
+    State& st = w.st;
+    st.tau_act = w.model
+                     ->torquesInContact(st.tau, {{sole_frame[kRight], st.wrench[kRight]},
+                                                 {sole_frame[kLeft], st.wrench[kLeft]}})
+                     .segment(6, model_template.actuatedCount());
+  }
+
   /// Damped-Newton inverse kinematics of one leg (6 joints, base fixed) putting its sole frame
   /// at `target`; each joint is clamped to [lower, upper] of `safe` ? the planner's safe range :
   /// the mechanical range. Stops below `tol` or after `iterations`; returns the final pose error.
@@ -484,14 +457,22 @@ struct OverstepProblem::Impl {
     m.setPositions(st.q);
     const Eigen::MatrixXd Jf = m.frameJacobian(f);
     for (int j = 0; j < 6; ++j) J.col(j) = Jf.col(cols[j]);
+    // The leg is singular only when stretched beyond reach (a point the reach row rejects, met
+    // during line searches): damped least squares there keeps the state finite.
     const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> lu(J);
+    const bool regular = lu.rcond() > 1e-10;
+    auto solve6 = [&](const core::Vector6d& b) -> core::Vector6d {
+      if (regular) return lu.solve(b);
+      return J.transpose() *
+             (J * J.transpose() + 1e-8 * Eigen::Matrix<double, 6, 6>::Identity()).ldlt().solve(b);
+    };
     for (int j = 0; j < 6; ++j) st.v(cols[j]) = 0.0;
-    const Eigen::Matrix<double, 6, 1> dv = -lu.solve(Jf * st.v);
+    const Eigen::Matrix<double, 6, 1> dv = -solve6(Jf * st.v);
     for (int j = 0; j < 6; ++j) st.v(cols[j]) = dv(j);
     for (int j = 0; j < 6; ++j) st.a(cols[j]) = 0.0;
     m.setVelocities(st.v);
     m.setAccelerations(st.a);
-    const Eigen::Matrix<double, 6, 1> da = -lu.solve(m.frameAcceleration(f));
+    const Eigen::Matrix<double, 6, 1> da = -solve6(m.frameAcceleration(f));
     for (int j = 0; j < 6; ++j) st.a(cols[j]) = da(j);
     m.setAccelerations(st.a);
     st.reach =
@@ -518,6 +499,7 @@ struct OverstepProblem::Impl {
     st.lifting = liftingFoot(phase);
     st.lift_weight = liftWeight(w, phase, t);
     distributeWrench(w);
+    contactTorques(w);
   }
 
   /// The passive (elastic) equations of motion at the current state: in single support the four
@@ -651,11 +633,6 @@ struct OverstepProblem::Impl {
       dv = DV[k_end];
       da = DA[k_end];
     };
-    auto liftOffAfter = [&](std::size_t k) {
-      const auto& p0 = phaseTable()[static_cast<std::size_t>(when[k].second)];
-      const auto& p1 = phaseTable()[static_cast<std::size_t>(when[k + 1].second)];
-      return p0.right_contact && p0.left_contact && !(p1.right_contact && p1.left_contact);
-    };
     auto apply = [&](std::size_t k) {
       d = D[k];
       dv = DV[k];
@@ -684,8 +661,7 @@ struct OverstepProblem::Impl {
     store(0);
     for (std::size_t k = 0; k + 1 < n; ++k) {
       if (when[k + 1].second != when[k].second) {
-        if ((cfg.passive_polish >= 2.0 && liftOffAfter(k)) || cfg.passive_polish >= 3.0)
-          blendToZero(k);
+        blendToZero(k);
         phase_first = k + 1;
         // Contact switch: carry the correction over by least squares in the new directions.
         const auto ls = U[k + 1].colPivHouseholderQr();
@@ -716,11 +692,11 @@ struct OverstepProblem::Impl {
       }
       store(k + 1);
     }
-    if (cfg.passive_polish >= 3.0) clearDoubleSupport(when, D, DV, DA);
+    clearDoubleSupport(when, D, DV, DA);
     for (std::size_t k = 0; k < n; ++k) apply(k);
   }
 
-  /// passive_polish 3: no correction in double support. There the solver's own motion leaves
+  /// No correction in double support. There the solver's own motion leaves
   /// only the sway-balance band (ds_balance_band) as the passive residual, while the integrated
   /// correction moved the lightly loaded landing foot's moments: 1.3 mm of CoP beyond the box
   /// 40 ms after the 20 cm run's second touchdown, even ramped in over 0.1 s (measured).
@@ -866,25 +842,6 @@ struct OverstepProblem::Impl {
     out.ineq.resize(ineq_cnt[static_cast<std::size_t>(k)]);
     out.eq.resize(eq_cnt[static_cast<std::size_t>(k)]);
     int r = 0;
-    if (isApproach(g)) {
-      out.terms.fill(0.0);
-      out.tau = st.tau.segment(6, model_template.actuatedCount());
-      if (st.contact[kRight] && st.contact[kLeft]) {
-        if (cfg.ds_balance_band > 0.0) {
-          out.ineq(0) = (st.ds_balance - cfg.ds_balance_band) / kFlexTorqueScale;
-          out.ineq(1) = (-st.ds_balance - cfg.ds_balance_band) / kFlexTorqueScale;
-        } else {
-          out.eq(0) = st.ds_balance / kFlexTorqueScale;
-        }
-      } else {
-        const int sw = st.contact[kRight] ? kLeft : kRight;
-        const double hmin = minHeight(g.s);
-        for (double cx : {foot[sw].sole.x_front, -foot[sw].sole.x_back})
-          for (double cy : {foot[sw].yMin(), foot[sw].yMax()})
-            out.ineq(r++) = (hmin - (st.sole[sw] * Eigen::Vector3d(cx, cy, 0.0)).z()) / kDistScale;
-      }
-      return;
-    }
     const double h = 0.5 * cop_box * cfg.limit_margin;
     const double mu = cfg.friction / std::sqrt(2.0) * cfg.limit_margin;
     const double tors = cfg.torsion * cfg.limit_margin;
@@ -1003,12 +960,8 @@ struct OverstepProblem::Impl {
         out.ineq(r++) = (aj.safeLower() - qj) / kJointScale;
       }
       out.ineq(r++) = (st.reach - cfg.leg_reach) / kDistScale;
-      if (cfg.ds_balance_band > 0.0) {
-        out.ineq(r++) = (st.ds_balance - cfg.ds_balance_band) / kFlexTorqueScale;
-        out.ineq(r++) = (-st.ds_balance - cfg.ds_balance_band) / kFlexTorqueScale;
-      } else {
-        out.eq(e++) = st.ds_balance / kFlexTorqueScale;
-      }
+      out.ineq(r++) = (st.ds_balance - cfg.ds_balance_band) / kFlexTorqueScale;
+      out.ineq(r++) = (-st.ds_balance - cfg.ds_balance_band) / kFlexTorqueScale;
     } else {
       const int stance = st.contact[kRight] ? kRight : kLeft;
       const Eigen::MatrixXd J = m.frameJacobian(sole_frame[stance]);
@@ -1111,38 +1064,8 @@ struct OverstepProblem::Impl {
         w.timing->durations()(g.phase) / cfg.samples_per_phase[static_cast<std::size_t>(g.phase)];
     const auto& ph = phaseTable()[static_cast<std::size_t>(g.phase)];
     const bool closed = !(ph.right_contact && ph.left_contact) || g.phase + 1 == kPhaseCount;
-    if (isApproach(g)) return 0.0;  // constraint rows only
     if (g.s == 1.0 || (g.s == 0.0 && closed)) return 0.5 * h;
     return h;
-  }
-
-  /// Mean squared jump of the jerk at the interior knots of every leg and ankle-flex curve, in
-  /// units of (10 rad/s^3)^2. Cubic curves only (a quintic's jerk is continuous): their
-  /// acceleration is linear on each span, so the jerk there is (a(k+1) - a(k)) / h(k).
-  double jerkJumps(const Workspace& w) const {
-    if (w.spline->degree() != 3) return 0.0;
-    const Eigen::ArrayXd& kn = w.spline->knots();
-    const int p = 3;
-    const int first = p, last = static_cast<int>(kn.size()) - p - 1;  // knots kn(first..last)
-    const int spans = last - first;
-    if (spans < 2) return 0.0;
-    Eigen::MatrixXd acc(16, spans + 1);
-    for (int k = 0; k <= spans; ++k) {
-      const double t = std::min(kn(first + k), kn(last) - 1e-12);
-      const PhaseSpline::Basis b = w.spline->evaluate(t);
-      const int nb = static_cast<int>(b.value.size());
-      acc.col(k).head(12) = w.legs_c.middleCols(b.first, nb) * b.d2;
-      acc.col(k).tail(4) = w.flex_c.middleCols(b.first, nb) * b.d2;
-    }
-    double sum = 0.0;
-    for (int k = 1; k < spans; ++k) {
-      const double h0 = kn(first + k) - kn(first + k - 1), h1 = kn(first + k + 1) - kn(first + k);
-      if (h0 < 1e-9 || h1 < 1e-9) continue;
-      const Eigen::VectorXd jump =
-          (acc.col(k + 1) - acc.col(k)) / h1 - (acc.col(k) - acc.col(k - 1)) / h0;
-      sum += jump.squaredNorm() / 100.0;
-    }
-    return sum / (16.0 * (spans - 1));
   }
 
   double objective(const Workspace& w, const std::vector<const SampleOut*>& s,
@@ -1166,7 +1089,6 @@ struct OverstepProblem::Impl {
     const double total = w.timing->total();
     for (int i = 0; i < kObjectiveTerms; ++i) acc[static_cast<std::size_t>(i)] /= total;
     acc[8] = total;
-    acc[12] = jerkJumps(w);
     double f = 0.0;
     for (int i = 0; i < kObjectiveTerms; ++i) {
       acc[static_cast<std::size_t>(i)] *= cfg.weights.at(names[static_cast<std::size_t>(i)]);

@@ -34,7 +34,7 @@ class NloptSolver final : public NlpSolver {
   }
 
   SolveResult solve(OverstepProblem& problem, const Eigen::VectorXd& x0, int stage,
-                    double deadline_s, double trust_radius, int max_iterations) override {
+                    double deadline_s, int max_iterations) override {
     const int n = problem.layout().total;
     nlopt::opt opt(algorithm_, static_cast<unsigned>(n));
     if (algorithm_ == nlopt::AUGLAG || algorithm_ == nlopt::AUGLAG_EQ) {
@@ -45,10 +45,6 @@ class NloptSolver final : public NlpSolver {
     Eigen::VectorXd lo, hi;
     problem.bounds(lo, hi);
     const Eigen::VectorXd D = problem.variableScale();
-    if (trust_radius > 0.0) {
-      lo = lo.cwiseMax(x0 - trust_radius * D);
-      hi = hi.cwiseMin(x0 + trust_radius * D);
-    }
     const Eigen::VectorXd lot = lo.cwiseQuotient(D), hit = hi.cwiseQuotient(D);
     opt.set_lower_bounds(std::vector<double>(lot.data(), lot.data() + n));
     opt.set_upper_bounds(std::vector<double>(hit.data(), hit.data() + n));
@@ -427,46 +423,16 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
       out.iterations += proj.iterations;
       x = proj.x;
     }
-    // Box trust region around the iterate (in units of variableScale()): SLSQP's first QP steps
-    // from an identity Hessian have norm ~15 and land where the contact kinematics are strongly
-    // nonlinear (measured: trial violations of 1e2-1e4). Rounds of SLSQP inside a box that grows
-    // on success and shrinks on failure keep every step where the linearisation holds.
-    double radius = cfg.solver.trust_radius;  // 0: one SLSQP run without a box
-    int stage_iterations = 0;
-    double best = std::numeric_limits<double>::infinity();
-    bool have = false;
-    int no_gain = 0;
-    while (stage_iterations < cfg.solver.max_iterations) {
-      const double remaining = time_limit_s - elapsed();
-      if (remaining <= 0.0) break;
-      const int budget =
-          cfg.solver.trust_radius > 0.0
-              ? std::min(cfg.solver.round_iterations, cfg.solver.max_iterations - stage_iterations)
-              : cfg.solver.max_iterations - stage_iterations;
-      SolveResult r = solver.solve(problem, x, static_cast<int>(i + 1), remaining, radius, budget);
-      stage_iterations += std::max(1, r.iterations);
-      out.iterations += r.iterations;
-      const bool feasible = r.max_violation <= kFeasibilityTolerance;
-      // Merit: feasibility first, then the objective.
-      const double score = feasible ? r.objective : 1e6 * (1.0 + r.max_violation);
-      if (!have || score < best - 1e-4 * std::abs(best)) {
-        const bool big_gain = have && score < best - 0.05 * std::abs(best);
-        best = score;
-        x = r.x;
-        out.final = r;
-        have = true;
-        radius = big_gain ? std::min(4.0 * cfg.solver.trust_radius, radius * 1.5) : radius;
-        no_gain = 0;
-      } else {
-        radius *= 0.5;
-        if (++no_gain >= 3 || cfg.solver.trust_radius <= 0.0) break;
-      }
-      if (cfg.solver.trust_radius <= 0.0 && r.status != "max_iterations") break;
-      if (r.interrupted) {
-        out.final.interrupted = true;
-        break;
-      }
+    const double remaining = time_limit_s - elapsed();
+    if (remaining <= 0.0) {
+      out.final.status = "time_limit";
+      break;
     }
+    SolveResult r =
+        solver.solve(problem, x, static_cast<int>(i + 1), remaining, cfg.solver.max_iterations);
+    out.iterations += r.iterations;
+    x = r.x;
+    out.final = r;
     if (out.final.interrupted) break;
     if (out.final.max_violation > kFeasibilityTolerance) {
       // SLSQP ends near, not always inside, the feasible set: polish with restoration steps

@@ -4,6 +4,7 @@
 
 #include "overstep/core/error.hpp"
 #include "overstep/core/wrench.hpp"
+#include "overstep/robots/leg.hpp"
 
 namespace overstep::planner {
 
@@ -20,10 +21,12 @@ core::Plan standingPlan(robots::WholeBodyModel& m, double duration, double rate)
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
   // Lean the legs (ankle pitch +delta, hip pitch -delta) until the CoM is above the ankles, with
   // the pelvis upright; the left sole is the anchor at the origin of its placement.
-  const int hip[2] = {m.actuatedCoordinate(d.actuatedIndex("RLEG_JOINT2")),
-                      m.actuatedCoordinate(d.actuatedIndex("LLEG_JOINT2"))};
-  const int ank[2] = {m.actuatedCoordinate(d.actuatedIndex("RLEG_JOINT4")),
-                      m.actuatedCoordinate(d.actuatedIndex("LLEG_JOINT4"))};
+  const std::vector<robots::LegChain> legs = robots::legChains(m);  // hip pitch: 3rd, ankle: 5th
+  if (legs.size() != 2) throw InputError("standing plan: needs a robot with two legs");
+  const int hip[2] = {m.actuatedCoordinate(legs[0].actuated[2]),
+                      m.actuatedCoordinate(legs[1].actuated[2])};
+  const int ank[2] = {m.actuatedCoordinate(legs[0].actuated[4]),
+                      m.actuatedCoordinate(legs[1].actuated[4])};
   Eigen::Isometry3d X_left = Eigen::Isometry3d::Identity();
   X_left.translation() << 0.0, 0.095, 0.0;
   auto build = [&](double delta) {
@@ -64,10 +67,14 @@ core::Plan standingPlan(robots::WholeBodyModel& m, double duration, double rate)
   p.coordinates = m.coordinateNames();
   const int N = static_cast<int>(std::round(duration * rate)) + 1;
   p.resize(N, n, m.actuatedCount());
+  core::Vector6d w_r = core::Vector6d::Zero(), w_l = core::Vector6d::Zero();
+  w_r(5) = mg - fl;
+  w_l(5) = fl;
+  const Eigen::VectorXd tau_c = m.torquesInContact(tau, {{rs, w_r}, {ls, w_l}});
   for (int k = 0; k < N; ++k) {
     p.t(k) = k / rate;
     p.q.col(k) = q;
-    p.tau.col(k) = tau.segment(6, m.actuatedCount());
+    p.tau.col(k) = tau_c.segment(6, m.actuatedCount());
     p.com.col(k) = c;
     p.zmp_wholebody.col(k) = c.head<2>();
     p.zmp_tablecart.col(k) = c.head<2>();
@@ -77,9 +84,7 @@ core::Plan standingPlan(robots::WholeBodyModel& m, double duration, double rate)
       const Eigen::Quaterniond qf(X.linear());
       pose << X.translation(), qf.w(), qf.x(), qf.y(), qf.z();
       (f == 0 ? p.right_foot : p.left_foot).col(k) = pose;
-      core::Vector6d w = core::Vector6d::Zero();
-      w(5) = f == 0 ? mg - fl : fl;
-      (f == 0 ? p.right_wrench : p.left_wrench).col(k) = w;
+      (f == 0 ? p.right_wrench : p.left_wrench).col(k) = f == 0 ? w_r : w_l;
     }
   }
   return p;
@@ -106,6 +111,7 @@ core::Plan excitationPlan(robots::WholeBodyModel& m, double duration, double amp
                           {"LARM_JOINT1", 0.10, 0.43, 1.9}};
   const double fade = 1.0;  // s
   const double mg = m.totalMass() * d.gravity;
+  const int rs = m.frameIndex(d.foot("right")->sole_frame);
   const int ls = m.frameIndex(d.foot("left")->sole_frame);
   const Eigen::Isometry3d X_left = m.framePose(ls);
   const int n = m.dofs();
@@ -146,7 +152,6 @@ core::Plan excitationPlan(robots::WholeBodyModel& m, double duration, double amp
     p.q.col(k) = q;
     p.v.col(k) = v;
     p.a.col(k) = a;
-    p.tau.col(k) = tau.segment(6, m.actuatedCount());
     p.com.col(k) = m.com();
     const Eigen::Vector2d zmp = core::zmpFromWrench(W);
     p.zmp_wholebody.col(k) = zmp;
@@ -164,6 +169,9 @@ core::Plan excitationPlan(robots::WholeBodyModel& m, double duration, double amp
       w(1) = -(zmp.x() - o.x()) * fzf;  // My about the sole origin: CoP at the ZMP's x
       (f == 0 ? p.right_wrench : p.left_wrench).col(k) = w;
     }
+    p.tau.col(k) =
+        m.torquesInContact(tau, {{rs, p.right_wrench.col(k)}, {ls, p.left_wrench.col(k)}})
+            .segment(6, m.actuatedCount());
   }
   p.summary_json = R"({"status": "excitation"})";
   return p;

@@ -60,7 +60,7 @@ core::Plan OverstepProblem::toPlan(const Eigen::VectorXd& x, double rate) {
     v[static_cast<std::size_t>(k)] = w.st.v;
     a[static_cast<std::size_t>(k)] = w.st.a;
   }
-  if (m.cfg.passive_polish > 0.0) m.polishPassive(w, uniq, q, v, a);
+  if (m.cfg.passive_polish) m.polishPassive(w, uniq, q, v, a);
   for (int k = 0; k < n; ++k) {
     const double t = uniq[static_cast<std::size_t>(k)].first;
     const int phase = uniq[static_cast<std::size_t>(k)].second;
@@ -72,7 +72,7 @@ core::Plan OverstepProblem::toPlan(const Eigen::VectorXd& x, double rate) {
     p.q.col(k) = st.q;
     p.v.col(k) = st.v;
     p.a.col(k) = st.a;
-    p.tau.col(k) = st.tau.segment(6, model.actuatedCount());
+    p.tau.col(k) = st.tau_act;
     p.com.col(k) = model.com();
     p.zmp_wholebody.col(k) = core::zmpFromWrench(st.W_O);
     p.zmp_tablecart.col(k) = core::tableCartZmp(model.com(), model.comAcceleration(), d.gravity);

@@ -468,6 +468,14 @@ Eigen::VectorXd WholeBodyModel::inverseDynamics() const {
   return tau;
 }
 
+Eigen::VectorXd WholeBodyModel::torquesInContact(const Eigen::VectorXd& tau_id,
+                                                 const std::vector<FrameWrench>& contacts) const {
+  impl_->checkSize(tau_id, "torques");
+  Eigen::VectorXd tau = tau_id;
+  for (const auto& c : contacts) tau.noalias() -= frameJacobian(c.frame).transpose() * c.wrench;
+  return tau;
+}
+
 Vector6d WholeBodyModel::contactWrenchFromBase(const Eigen::VectorXd& tau) const {
   if (impl_->nb != 6) throw InputError("contactWrenchFromBase needs a floating-base robot");
   BodyNode* base = impl_->skel->getRootBodyNode();

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "overstep/core/error.hpp"
+#include "overstep/robots/leg.hpp"
 #include "overstep/robots/whole_body_model.hpp"
 
 namespace overstep::runtime {
@@ -97,22 +98,22 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
   const int imu = model.frameIndex("imu");
   const int base = model.frameIndex(d.base_link);
 
-  // Leg joints: the actuated columns of each sole's Jacobian at the first sample; the elastic
-  // joints above each sole (their common centre is where a foot rotation is applied).
+  // Leg joints and the elastic joints above each sole (their common centre is where a foot
+  // rotation is applied), from the kinematic tree; the closed-form leg solver for the move to
+  // the plan's start.
   std::vector<std::string> bushing_joints[2];
-  model.setPositions(plan.q.col(0));
+  const std::vector<robots::LegChain> legs = robots::legChains(model);
   for (int f = 0; f < 2; ++f) {
-    const Eigen::MatrixXd J = model.frameJacobian(sole[f]);
-    int n = 0;
-    for (int j = 0; j < nA; ++j) {
-      if (J.col(model.actuatedCoordinate(j)).norm() < 1e-12) continue;
-      if (n == 6) throw InputError("the runtime needs exactly 6 actuated joints per leg");
-      leg_[static_cast<std::size_t>(f)][static_cast<std::size_t>(n++)] = j;
-    }
-    if (n != 6) throw InputError("the runtime needs exactly 6 actuated joints per leg");
-    for (int e = 0; e < model.elasticCount(); ++e)
-      if (J.col(model.elasticCoordinate(e)).norm() > 1e-12)
-        bushing_joints[f].push_back(d.elastic[static_cast<std::size_t>(e)].name);
+    const robots::LegChain& c = legs[static_cast<std::size_t>(f)];
+    if (c.side != (f == 0 ? "right" : "left"))
+      throw InputError("the runtime needs the right foot first, then the left");
+    for (int i = 0; i < 6; ++i)
+      leg_[static_cast<std::size_t>(f)][static_cast<std::size_t>(i)] =
+          c.actuated[static_cast<std::size_t>(i)];
+    for (int e : c.elastic)
+      bushing_joints[f].push_back(d.elastic[static_cast<std::size_t>(e)].name);
+    ik_[f] = std::make_unique<robots::LegIk>(model, c);
+    ankle_frame_[f] = c.ankle_frame;
   }
 
   com_.resize(3, N);
@@ -209,28 +210,26 @@ bool PlanTrack::planMove(const Eigen::VectorXd& q_now, int samples, Eigen::Matri
   m.anchorBase(sole_frame_[anchor], soles[anchor], q, v, a);
   const Eigen::Isometry3d base_from = m.framePose(m.frameIndex(m.description().base_link));
   const Eigen::Quaterniond r_from(base_from.linear()), r_to(base_to.linear());
-  // Each leg is solved for its ankle link (the F/T sensor frame, above the bushing, at the
-  // bushing's centre): from where the measured joints put it to where the plan's first sample
-  // has it. The bushings take the change of orientation between the ankle and the flat foot,
-  // so the move starts exactly at the measured joints whatever the bushings' deflection.
+  // Each leg is solved, in closed form, for its ankle link (above the bushing): from where the
+  // measured joints put it to where the plan's first sample has it. The bushings take the change
+  // of orientation between the ankle and the flat foot, so the move starts exactly at the
+  // measured joints whatever the bushings' deflection.
   Eigen::Isometry3d ankle_from[2], ankle_to[2];
-  for (int f = 0; f < 2; ++f) ankle_from[f] = m.framePose(sensor_frame_[f]);
+  for (int f = 0; f < 2; ++f) ankle_from[f] = m.framePose(ankle_frame_[f]);
   m.setPositions(q0_);
-  for (int f = 0; f < 2; ++f) ankle_to[f] = m.framePose(sensor_frame_[f]);
+  for (int f = 0; f < 2; ++f) ankle_to[f] = m.framePose(ankle_frame_[f]);
   // The ankles (bushing centres) sit on the feet: if the measured joints put the other one more
   // than 2 mm from where the plan's start has it, the robot does not stand on the plan's start
   // placements, and no motion in double support can get it there.
   if (both &&
       (ankle_from[1 - anchor].translation() - ankle_to[1 - anchor].translation()).norm() > 2e-3)
     return false;
-  const int base_frame = m.frameIndex(m.description().base_link);
   for (int k = 0; k < samples; ++k) {
     const double u = static_cast<double>(k) / (samples - 1);
     const double b = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
     Eigen::VectorXd qa = q_now + b * (q_to - q_now);
     if (both) {
-      // Base at the interpolated pose (set through the anchor closure of the previous solution),
-      // then each leg solved onto its sole.
+      // Base at the interpolated pose, then each leg solved onto its (interpolated) ankle pose.
       Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
       base.linear() = r_from.slerp(b, r_to).toRotationMatrix();
       base.translation() = (1.0 - b) * base_from.translation() + b * base_to.translation();
@@ -242,25 +241,12 @@ bool PlanTrack::planMove(const Eigen::VectorXd& q_now, int samples, Eigen::Matri
                               .toRotationMatrix();
         target.translation() =
             (1.0 - b) * ankle_from[f].translation() + b * ankle_to[f].translation();
-        if (k > 0)
-          for (int i = 0; i < 6; ++i) qa(leg[std::size_t(i)]) = out(leg[std::size_t(i)], k - 1);
-        for (int it = 0; it < 50; ++it) {
-          q.segment(m.actuatedCoordinate(0), nA) = qa;
-          m.anchorBase(base_frame, base, q, v, a);
-          const Eigen::Isometry3d X = m.framePose(sensor_frame_[f]);
-          core::Vector6d e;
-          const Eigen::AngleAxisd aa(target.linear() * X.linear().transpose());
-          e.head<3>() = aa.axis() * aa.angle();
-          e.tail<3>() = target.translation() - X.translation();
-          if (e.norm() < 1e-10) break;
-          const Eigen::MatrixXd J = m.frameJacobian(sensor_frame_[f]);
-          Matrix6d Jl;
-          for (int i = 0; i < 6; ++i) Jl.col(i) = J.col(m.actuatedCoordinate(leg[std::size_t(i)]));
-          const core::Vector6d dq =
-              (Jl.transpose() * Jl + 1e-8 * Matrix6d::Identity()).ldlt().solve(Jl.transpose() * e);
-          for (int i = 0; i < 6; ++i) qa(leg[std::size_t(i)]) += dq(i);
-          if (it == 49) return false;
-        }
+        robots::Vector6d prev;  // the previous point's solution picks the branch
+        for (int i = 0; i < 6; ++i)
+          prev(i) = k > 0 ? out(leg[std::size_t(i)], k - 1) : q_now(leg[std::size_t(i)]);
+        const robots::LegIkResult r = ik_[f]->solve(base.inverse() * target, &prev);
+        if (!r.reachable) return false;
+        for (int i = 0; i < 6; ++i) qa(leg[std::size_t(i)]) = r.q(i);
         for (int i = 0; i < 6; ++i) {
           const int j = leg[std::size_t(i)];
           if (qa(j) < lower_(j) || qa(j) > upper_(j)) return false;

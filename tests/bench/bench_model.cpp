@@ -4,6 +4,7 @@
 
 #include <random>
 
+#include "overstep/robots/leg.hpp"
 #include "overstep/robots/whole_body_model.hpp"
 
 namespace {
@@ -94,6 +95,24 @@ void BM_CentroidalMomentum(benchmark::State& st) {
   for (auto _ : st) benchmark::DoNotOptimize(m.centroidalMomentum());
 }
 BENCHMARK(BM_CentroidalMomentum);
+
+// One closed-form leg solve (the double-support leg of every planner sample, the runtime's move
+// to a plan's start), two targets alternating.
+void BM_LegIkClosedForm(benchmark::State& st) {
+  WholeBodyModel& m = model();
+  const auto legs = overstep::robots::legChains(m);
+  const overstep::robots::LegIk ik(m, legs[0]);
+  overstep::robots::Vector6d q0, q1;
+  q0 << 0.05, -0.1, -0.5, 0.9, -0.4, 0.1;
+  q1 << -0.1, 0.05, -0.3, 1.1, -0.6, -0.05;
+  const Eigen::Isometry3d X[2] = {ik.forward(q0), ik.forward(q1)};
+  int k = 0;
+  for (auto _ : st) {
+    benchmark::DoNotOptimize(ik.solve(X[k]));
+    k ^= 1;
+  }
+}
+BENCHMARK(BM_LegIkClosedForm);
 
 }  // namespace
 

@@ -84,6 +84,40 @@ TEST_F(Check, WrenchesThatDoNotCarryTheWeightAreNamed) {
   EXPECT_EQ(r.family("dynamics")->detail, "base force");
 }
 
+TEST(CheckTorques, AKneeOverloadedInContactIsNamedThoughItsHangingTorqueIsSmall) {
+  // The same robot with 20 N m knees: standing on both feet, each knee carries about half the
+  // weight on the shank's lever (~35 N m); the leg hanging from the pelvis needs ~2 N m. The
+  // check must judge the torque of the robot in contact.
+  test::TempDir dir;
+  std::string yaml = test::slurp(test::hrp2Yaml());
+  for (const char* knee : {"RLEG_JOINT3", "LLEG_JOINT3"}) {
+    const std::string from = std::string(knee) + ", limits_deg: [-2, 150], safety_margin_deg: 5, " +
+                             "velocity: 3.98, torque: 168";
+    yaml = test::replaceOnce(yaml, from,
+                             std::string(knee) + ", limits_deg: [-2, 150], safety_margin_deg: " +
+                                 "5, velocity: 3.98, torque: 20");
+  }
+  test::writeText(dir.path() / "hrp2.yaml", yaml);
+  test::writeText(dir.path() / "hrp2.urdf", test::slurp(test::hrp2Urdf()));
+  robots::WholeBodyModel m = robots::WholeBodyModel::fromFile(dir.file("hrp2.yaml"));
+  const core::Plan p = test::standingPlan(m);
+  const auto& d = m.description();
+  m.setState(p.q.col(0), p.v.col(0), p.a.col(0));
+  const Eigen::VectorXd hanging = m.inverseDynamics();
+  for (const char* knee : {"RLEG_JOINT3", "LLEG_JOINT3"}) {
+    const int a = d.actuatedIndex(knee);
+    EXPECT_LT(std::abs(hanging(m.actuatedCoordinate(a))), 5.0) << knee;
+    EXPECT_GT(std::abs(p.tau(a, 0)), 25.0)
+        << knee << ": the plan file's torque is the physical one";
+  }
+  const CheckReport r = checkPlan(p, m);
+  EXPECT_FALSE(r.valid);
+  ASSERT_FALSE(r.family("torque")->ok());
+  EXPECT_NE(r.family("torque")->detail.find("LEG_JOINT3"), std::string::npos)
+      << r.family("torque")->detail;
+  EXPECT_GT(r.family("torque")->worst, 0.5);  // > 150 % of the 20 N m limit
+}
+
 TEST_F(Check, RefusesAPlanForAnotherRobot) {
   core::Plan p = *plan_;
   p.robot_hash = "0123456789abcdef";
@@ -116,8 +150,20 @@ TEST_F(Check, CorruptPlanFilesAreBadInput) {
   test::writeText(dir.path() / "trunc.json", text.substr(0, text.size() / 2));
   EXPECT_THROW(core::loadPlan(dir.file("trunc.json")), InputError);
   test::writeText(dir.path() / "ver.json",
-                  test::replaceOnce(text, "\"version\":1", "\"version\":9"));
+                  test::replaceOnce(text, "\"version\":2", "\"version\":9"));
   EXPECT_THROW(core::loadPlan(dir.file("ver.json")), InputError);
+  // Version 1 files hold the torques of a robot hanging from its pelvis: refused, saying why.
+  test::writeText(dir.path() / "v1.json",
+                  test::replaceOnce(text, "\"version\":2", "\"version\":1"));
+  try {
+    core::loadPlan(dir.file("v1.json"));
+    ADD_FAILURE() << "a version 1 plan was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("contact forces"), std::string::npos) << e.what();
+  }
+  test::writeText(dir.path() / "big.json",
+                  test::replaceOnce(text, "\"version\":2", "\"version\":4294967298"));
+  EXPECT_THROW(core::loadPlan(dir.file("big.json")), InputError);  // not read modulo 2^32
   test::writeText(dir.path() / "nan.json",
                   test::replaceOnce(text, "\"rate\":200.0", "\"rate\":-1"));
   EXPECT_THROW(core::loadPlan(dir.file("nan.json")), InputError);

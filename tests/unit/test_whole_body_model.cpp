@@ -348,6 +348,36 @@ TEST(TwoLink, MassMatrixGravityAndSpringInClosedForm) {
   }
 }
 
+TEST(TwoLink, ActuatorTorqueWithItsTipOnASupportInClosedForm) {
+  // The arm at rest with its tip on a support that pushes with force F and moment M_y: the
+  // shoulder motor holds gravity minus the support's moment about the shoulder, the bushing its
+  // share about the elbow. Without the contact term the shoulder would hold the whole weight.
+  WholeBodyModel m = WholeBodyModel::fromFile(test::twoLinkYaml());
+  const int tip = m.frameIndex("tip");
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Eigen::Vector2d q(u(rng), 0.5 * u(rng));
+    m.setState(q, Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero());
+    const double Fx = 20.0 * u(rng), Fz = 30.0 + 10.0 * u(rng), My = 2.0 * u(rng);
+    FrameWrench w;
+    w.frame = tip;
+    w.wrench << 0.0, My, 0.0, Fx, 0.0, Fz;  // [torque; force] about the tip, world axes
+    const Eigen::VectorXd tau = m.torquesInContact(m.inverseDynamics(), {w});
+    // A rotation q about +y turns a link along +x to (cos q, 0, -sin q).
+    const double t1 = q(0), t2 = q(0) + q(1);
+    const Eigen::Vector3d elbow(kL1 * std::cos(t1), 0.0, -kL1 * std::sin(t1));
+    const Eigen::Vector3d p = elbow + Eigen::Vector3d(0.4 * std::cos(t2), 0.0, -0.4 * std::sin(t2));
+    auto supportMomentY = [&](const Eigen::Vector3d& r) { return My + r.z() * Fx - r.x() * Fz; };
+    const double gravity1 =
+        -kM1 * kG * kLc1 * std::cos(t1) - kM2 * kG * (kL1 * std::cos(t1) + kLc2 * std::cos(t2));
+    const double gravity2 = -kM2 * kG * kLc2 * std::cos(t2) + kK * q(1);
+    EXPECT_NEAR(tau(0), gravity1 - supportMomentY(p), 1e-9) << "trial " << trial;
+    EXPECT_NEAR(tau(1), gravity2 - supportMomentY(p - elbow), 1e-9) << "trial " << trial;
+    EXPECT_GT(std::abs(tau(0) - m.inverseDynamics()(0)), 1.0);  // the contact term matters
+  }
+}
+
 TEST(TwoLink, StaticMomentDeflectsElasticJointByMomentOverStiffness) {
   WholeBodyModel m = WholeBodyModel::fromFile(test::twoLinkYaml());
   // Upper link horizontal; find the flex angle where the passive joint is in equilibrium

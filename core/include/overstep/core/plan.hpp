@@ -23,7 +23,10 @@ struct PlanPhase {
 };
 
 struct Plan {
-  static constexpr int kFormatVersion = 1;
+  /// 2: `tau` holds the actuator torques of the robot in contact (inverse dynamics minus the
+  /// feet's J^T f); version 1 files held the torques of the robot hanging from its pelvis and
+  /// are refused.
+  static constexpr int kFormatVersion = 2;
 
   std::string robot_name;
   std::string robot_file;
@@ -41,7 +44,7 @@ struct Plan {
   Eigen::MatrixXd q;              ///< dofs x N positions
   Eigen::MatrixXd v;              ///< dofs x N velocities
   Eigen::MatrixXd a;              ///< dofs x N accelerations
-  Eigen::MatrixXd tau;            ///< actuated x N joint torques, N m
+  Eigen::MatrixXd tau;            ///< actuated x N actuator torques (robot in contact), N m
   Eigen::MatrixXd com;            ///< 3 x N, m
   Eigen::MatrixXd zmp_wholebody;  ///< 2 x N, m
   Eigen::MatrixXd zmp_tablecart;  ///< 2 x N, m

@@ -6,6 +6,7 @@
 #include <array>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "overstep/planner/phases.hpp"
 
@@ -18,14 +19,11 @@ struct SolverSettings {
   double ftol_rel = 1e-7;
   double time_limit = 900.0;  ///< s
   int threads = 2;
-  double trust_radius = 0.0;  ///< initial box trust region (units of variableScale()); 0: off
-  int round_iterations = 60;  ///< SLSQP iterations per trust-region round
 };
 
 struct PlannerConfig {
   std::array<int, kPhaseCount> samples_per_phase{9, 12, 9, 12, 9};
-  std::array<int, kPhaseCount> spline_intervals{3, 6, 3, 6, 3};
-  int spline_degree = 3;  ///< 3 (cubic) or 5 (quintic: continuous jerk; docs/planner.md)
+  std::array<int, kPhaseCount> spline_intervals{3, 6, 3, 6, 3};  ///< cubic B-spline spans
   std::array<double, kPhaseCount> duration_min{0.4, 0.7, 0.15, 0.7, 0.4};
   std::array<double, kPhaseCount> duration_max{1.2, 2.0, 1.0, 2.0, 1.2};
   std::array<double, kPhaseCount> duration_guess{0.8, 1.5, 0.6, 1.5, 0.8};
@@ -51,33 +49,19 @@ struct PlannerConfig {
   /// touchdown (1.2 mrad beyond the range between samples at 0.8 on the 20 cm run; measured,
   /// docs/planner.md).
   double pelvis_margin = 0.5;
-  /// N m. 0: the double-support sway balance is an equality at each sample; > 0: a band
-  /// |residual| <= ds_balance_band (two inequality rows), easier on SLSQP with dense sampling.
+  /// N m: the double-support sway balance (the ankles' moment about the line joining the feet,
+  /// which only the bushings can supply) within +-ds_balance_band at each sample.
   double ds_balance_band = 0.3;
   /// Swept clearance: each leg capsule's obstacle and self-collision distance at a sample is
   /// reduced by this factor times its fastest endpoint's speed times half the sample interval (the
   /// farthest it can travel before the nearer sample), so that the clearance holds between
   /// samples too. 0: off; 1: the full half-interval travel.
   double swept_clearance = 1.0;
-  /// 1: the plan file's passive (elastic) coordinates are integrated between the collocation
-  /// samples so that they obey their equations of motion under the planned joint trajectories
-  /// (OverstepProblem::toPlan, docs/planner.md); 2 (default): the same, with the correction
-  /// blended back to zero before each lift-off, where the unloading foot's wrench must vanish;
-  /// 3 (default): single support only (blended to zero before each touchdown too; double
-  /// support keeps the solver's motion, whose residual is the sway-balance band); 0: the
-  /// splines as solved.
-  double passive_polish = 3.0;
-  /// 1: an extra sample half an interval before each lift-off (the sway balance only) and
-  /// touchdown (the landing sole's corners only); 0: none (default: with them SLSQP stalled at
-  /// scaled violations of 0.8-1 in every 5 cm run; docs/planner.md).
-  double approach_samples = 0.0;
-  /// The foot whose placement fixes the floating base during the transfer double support
-  /// (ds_transfer): "right" (default), the foot that has just landed and carries the body through
-  /// the second swing, so that the stance leg and the base stay smooth through the second lift-off
-  /// and only the lifting leg changes representation there; "left" (sessions 1-5): the lifting
-  /// foot, whose switch made the stance leg's and the base's accelerations, and so the total
-  /// contact wrench, jump at the lift-off (docs/planner.md).
-  std::string transfer_anchor = "right";
+  /// The plan file's passive (elastic) coordinates in single support integrated between the
+  /// collocation samples so that they obey their equations of motion under the planned joint
+  /// trajectories, blended back to the solver's own motion before each contact switch
+  /// (OverstepProblem::toPlan, docs/planner.md); false: the splines as solved.
+  bool passive_polish = true;
   /// Fraction of each joint's velocity limit enforced at the samples (the motion between them
   /// overshoots; measured 9 % at 1.0).
   double velocity_margin = 0.9;
@@ -94,8 +78,7 @@ struct PlannerConfig {
                                         {"time", 0.3},
                                         {"head", 0.1},
                                         {"torque_rate", 0.01},
-                                        {"ds_leg_tracking", 0.01},
-                                        {"jerk_jump", 0.0}};
+                                        {"ds_leg_tracking", 0.01}};
   double head_pitch_offset = 0.0;
 
   SolverSettings solver;
@@ -104,16 +87,27 @@ struct PlannerConfig {
   std::string toJson() const;
 };
 
+/// One scalar key of planner.yaml: the table drives loading (range checks), --json / plan-file
+/// output and the documentation (planner/planner.yaml lists every key; a test holds them equal).
+struct ConfigEntry {
+  const char* key;
+  const char* unit;
+  double lo, hi;  ///< accepted range, inclusive (open_low: lo itself excluded)
+  bool open_low;
+  double PlannerConfig::*field;
+  const char* help;
+};
+/// The scalar keys, in planner.yaml order. Lists, maps and the solver section are read beside it.
+const std::vector<ConfigEntry>& configTable();
+
 /// Loads planner.yaml; keys absent from the file keep their defaults. InputError on a malformed
 /// file, an unknown key or an invalid value (one line naming file and key).
 PlannerConfig loadPlannerConfig(const std::string& path);
 
 /// Number of objective terms: the seed's eqs. (20)-(27) split into 11 named terms, plus
 /// "ds_leg_tracking", a small regulariser that keeps the double-support leg's (unused) spline near
-/// its inverse-kinematics solution so that the IK is always seeded on the right branch, and
-/// "jerk_jump", the squared jumps of the cubic splines' jerk at their knots (the acceleration
-/// kinks where the double-support sway balance peaks between samples; docs/planner.md).
-inline constexpr int kObjectiveTerms = 13;
+/// its inverse-kinematics solution, so that the spline is a good start for the switching rows.
+inline constexpr int kObjectiveTerms = 12;
 /// Names of the objective terms, in report order.
 const std::array<const char*, kObjectiveTerms>& objectiveTermNames();
 

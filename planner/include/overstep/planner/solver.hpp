@@ -36,10 +36,10 @@ struct SolveResult {
 class NlpSolver {
  public:
   virtual ~NlpSolver() = default;
-  /// Solves from x0 within the variable bounds and, when trust_radius > 0, within
-  /// x0 +- trust_radius * variableScale() (a box trust region), for at most max_iterations.
+  /// Solves from x0 within the variable bounds, for at most max_iterations (derivative
+  /// evaluations) and deadline_s seconds.
   virtual SolveResult solve(OverstepProblem& problem, const Eigen::VectorXd& x0, int stage,
-                            double deadline_s, double trust_radius, int max_iterations) = 0;
+                            double deadline_s, int max_iterations) = 0;
 };
 
 /// NLopt with vector constraints and an x-keyed cache (one trajectory evaluation serves the

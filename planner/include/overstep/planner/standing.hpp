@@ -11,7 +11,8 @@
 
 namespace overstep::planner {
 
-/// Needs RLEG/LLEG_JOINT2 (hip pitch) and JOINT4 (ankle pitch) and a left and right foot.
+/// Needs two legs (robots::legChains; their hip and ankle pitch joints lean the body) and a
+/// left and right foot.
 /// Throws InputError for a duration outside (0, 3600] s or a rate outside [50, 1000] Hz.
 core::Plan standingPlan(robots::WholeBodyModel& model, double duration, double rate = 200.0);
 

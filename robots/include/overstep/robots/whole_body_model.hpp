@@ -34,6 +34,13 @@ using core::Vector6d;
 
 /// A contact constraint for the impact map: a point contact constrains the frame origin's linear
 /// velocity (3 rows); a flat contact constrains the frame's full spatial velocity (6 rows).
+/// A contact wrench acting on the robot at a frame: [torque; force] (N m, N) about the frame's
+/// origin, world axes (the plan file's convention for the feet).
+struct FrameWrench {
+  int frame = -1;
+  Vector6d wrench = Vector6d::Zero();
+};
+
 struct ContactConstraint {
   enum class Type { Point, Flat };
   int frame = -1;
@@ -129,6 +136,13 @@ class WholeBodyModel {
   /// Actuated rows: joint torques. Elastic rows: zero when the motion is dynamically consistent.
   /// Base rows: the generalized contact force the motion requires.
   Eigen::VectorXd inverseDynamics() const;
+  /// Generalized forces of the robot in contact (seed eq. 1): tau_id - sum_c J_c^T w_c, with
+  /// tau_id = inverseDynamics() at the current state and J_c the world-aligned Jacobian of
+  /// contact c's frame. Actuated rows: the actuator torques (the robot hanging from its base
+  /// when `contacts` is empty); elastic rows: the bushings' residual (zero for a consistent
+  /// motion); base rows: zero when the wrenches balance the motion.
+  Eigen::VectorXd torquesInContact(const Eigen::VectorXd& tau_id,
+                                   const std::vector<FrameWrench>& contacts) const;
   /// Total contact wrench the motion requires, from the base rows of `tau` (as returned by
   /// inverseDynamics()), about the world origin in the world frame. Floating base only.
   Vector6d contactWrenchFromBase(const Eigen::VectorXd& tau) const;

@@ -20,7 +20,8 @@
 
 namespace overstep::robots {
 class WholeBodyModel;
-}
+class LegIk;
+}  // namespace overstep::robots
 
 namespace overstep::runtime {
 
@@ -128,6 +129,8 @@ class PlanTrack {
   Eigen::VectorXd q0_;                             ///< the plan's first sample (all coordinates)
   int sole_frame_[2] = {-1, -1};
   int sensor_frame_[2] = {-1, -1};  ///< F/T frames: on the ankle links, at the bushing centres
+  int ankle_frame_[2] = {-1, -1};   ///< the ankle links (above the bushings)
+  std::unique_ptr<robots::LegIk> ik_[2];  ///< closed-form leg solvers (planMove)
 };
 
 }  // namespace overstep::runtime
