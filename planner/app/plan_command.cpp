@@ -166,6 +166,12 @@ int runPlan(const PlanOptions& o) {
   summary["solve_time"] = out.solve_time;
   summary["iterations"] = out.iterations;
   summary["evaluations"] = problem.evaluationCount();
+  summary["jacobians"] = problem.work().jacobians;
+  summary["time_split"] = {{"derivatives", out.split.derivatives},
+                           {"evaluations", out.split.evaluations},
+                           {"nlopt", out.split.nlopt},
+                           {"restoration", out.split.restoration},
+                           {"other", out.split.other}};
   summary["objective"] = out.final.objective;
   summary["x"] = std::vector<double>(x.data(), x.data() + x.size());  // for --warm-start
   nlohmann::json terms;
@@ -208,6 +214,11 @@ int runPlan(const PlanOptions& o) {
             : (out.valid ? "planner-feasible, rejected by the 1 kHz check" : "no valid plan"),
       summary["duration"].get<double>(), summary["step_length"].get<double>(),
       summary["foot_spacing"].get<double>(), out.iterations, out.solve_time, path.c_str());
+  std::fprintf(log,
+               "time: derivatives %.1f s, evaluations %.1f s, NLopt %.1f s, restoration %.1f s, "
+               "other %.1f s (%d Jacobians, %d evaluations)\n",
+               out.split.derivatives, out.split.evaluations, out.split.nlopt, out.split.restoration,
+               out.split.other, problem.work().jacobians, problem.evaluationCount());
   if (o.json) std::cout << summary.dump(2) << "\n";
   if (cli::StopSignals::requested()) {
     cli::printError("plan", "interrupted; best attempt written to " + path);

@@ -1,3 +1,5 @@
+#include <chrono>
+
 #include "problem_impl.hpp"
 
 namespace overstep::planner {
@@ -28,6 +30,7 @@ const std::vector<Family>& OverstepProblem::inequalityFamilies() const { return 
 const std::vector<Family>& OverstepProblem::equalityFamilies() const { return impl_->eq_fam; }
 double OverstepProblem::toesX() const { return impl_->toes_x; }
 int OverstepProblem::evaluationCount() const { return impl_->evaluations.load(); }
+const WorkAccount& OverstepProblem::work() const { return impl_->work; }
 void OverstepProblem::setDifficulty(double h, double box) {
   impl_->height = h;
   impl_->cop_box = box;
@@ -77,10 +80,14 @@ Eigen::VectorXd OverstepProblem::variableScale() const {
 void OverstepProblem::evaluate(const Eigen::VectorXd& x, Evaluation& out) {
   Impl& m = *impl_;
   if (x.size() != m.lay.total) throw InputError("planner: wrong number of variables");
+  const auto start = std::chrono::steady_clock::now();
   auto& w = m.ws.front();
   m.evaluateAll(x, w, m.base_samples, m.base_events);
   m.base_x = x;
   m.assemble(w, m.base_samples, m.base_events, out);
+  ++m.work.evaluations;
+  m.work.evaluate_s +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at,
@@ -91,6 +98,7 @@ void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at
     Evaluation tmp;
     evaluate(x, tmp);
   }
+  const auto start = std::chrono::steady_clock::now();
   const int n = m.lay.total;
   grad.setZero(n);
   jin.setZero(m.n_ineq, n);
@@ -169,6 +177,9 @@ void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at
   for (auto& t : threads) t.join();
   // Workspace 0 holds the perturbed decode: restore the baseline decode for later use.
   m.decode(x, m.ws.front());
+  ++m.work.jacobians;
+  m.work.derivatives_s +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 std::string OverstepProblem::describeRow(const Eigen::VectorXd& x, bool equality, int row) const {

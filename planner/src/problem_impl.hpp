@@ -33,9 +33,8 @@ inline constexpr double kDistScale = 0.05;       // m, scale of clearance/distan
 inline constexpr double kJointScale = 0.1;       // rad
 inline constexpr double kFlexTorqueScale = 5.0;  // N m
 inline constexpr double kKsSharpness = 40.0;
-// Lift-off rows, fractions of the weight (docs/planner.md, session 7).
-inline constexpr double kLiftOffShear = 0.05;   // scale of the lifting foot's shear rows
-inline constexpr double kLiftOffNormal = 0.03;  // scale of its normal-force row
+// Lift-off rows: scale of the lifting foot's normal-force row, a fraction of the weight.
+inline constexpr double kLiftOffNormal = 0.03;
 // Double-support wrench split (distributeWrench).
 inline constexpr double kLoadFloor = 0.02;        // softness of the load share at zero force
 inline constexpr double kLiftWeightFloor = 1e-3;  // lifting foot's share factor at lift-off
@@ -84,7 +83,7 @@ struct SampleOut {
 /// The full state of the robot at one instant, and the contact wrenches.
 struct State {
   Eigen::VectorXd q, v, a, tau;  // tau: inverse dynamics without contacts (all coordinates)
-  Eigen::VectorXd tau_act;       // actuator torques in contact (seed eq. 1; stateFrom only)
+  Eigen::VectorXd tau_act;       // actuator torques of the robot in contact (seed eq. 1)
   core::Vector6d wrench[2];      // [torque; force] about each sole origin, world frame
   bool contact[2] = {false, false};
   Eigen::Isometry3d sole[2];
@@ -134,6 +133,7 @@ struct OverstepProblem::Impl {
   std::vector<Family> ineq_fam, eq_fam;
   int n_ineq = 0, n_eq = 0;
   static constexpr int kEvents = 4;
+  static constexpr int kLiftOffRows = 3;  // the lifting foot's normal force and tipping moments
   int event_eq_off[kEvents]{};
   int event_eq_cnt[kEvents]{};
   // Per phase, the foot whose placement fixes the floating base (phaseTable()). At a switch the
@@ -151,6 +151,7 @@ struct OverstepProblem::Impl {
   };
   std::vector<Workspace> ws;
   std::atomic<int> evaluations{0};
+  WorkAccount work;
 
   // Baseline cache (for finite differences).
   std::vector<SampleOut> base_samples;
@@ -289,7 +290,7 @@ struct OverstepProblem::Impl {
       event_eq_off[e] = n_eq;
       for (int r = 0; r < 12; ++r) eq_fam.push_back(Family::Switching);
       if (e == 0 || e == 2)
-        for (int r = 0; r < 6; ++r) eq_fam.push_back(Family::LiftOff);
+        for (int r = 0; r < kLiftOffRows; ++r) eq_fam.push_back(Family::LiftOff);
 
       event_eq_cnt[e] = static_cast<int>(eq_fam.size()) - n_eq;
       n_eq = static_cast<int>(eq_fam.size());
@@ -386,13 +387,11 @@ struct OverstepProblem::Impl {
     st.lifting = liftingFoot(phase);
     st.lift_weight = liftWeight(w, phase, t);
     distributeWrench(w);
+    contactTorques(w);
   }
 
   /// Actuator torques of the robot in contact (seed eq. 1): the actuated rows of inverse dynamics
-  /// minus the feet's J^T w, for the plan file (and so for `overstep check`, which accepts a plan
-  /// only within the torque limits). The solve's torque-limit row and torque-rate term (eq. 27)
-  /// still use inverse dynamics without the contacts: with these torques the solve took other
-  /// paths, more than twice as long (docs/planner.md, Status).
+  /// minus the feet's J^T w (the torque rows, seed eq. 27 and the plan file use these).
   void contactTorques(Workspace& w) const {
     State& st = w.st;
     st.tau_act = w.model
@@ -943,7 +942,7 @@ struct OverstepProblem::Impl {
       const int na = model_template.actuatedCount();
       Eigen::VectorXd ratio(2 * na);
       for (int j = 0; j < na; ++j) {
-        const double tq = st.tau(model_template.actuatedCoordinate(j));
+        const double tq = st.tau_act(j);
         ratio(2 * j) = tq / d.actuated[static_cast<std::size_t>(j)].torque;
         ratio(2 * j + 1) = -ratio(2 * j);
       }
@@ -1004,7 +1003,7 @@ struct OverstepProblem::Impl {
       T[9] = (hy * hy + hp * hp + hr * hr) / 0.0025;
     }
     T[11] = st.ik_seed_gap / 0.0025;
-    out.tau = st.tau.segment(6, model_template.actuatedCount());
+    out.tau = st.tau_act;
   }
 
   /// Switching rows at event e (instants t1..t4): the spline of the leg that changes
@@ -1032,27 +1031,26 @@ struct OverstepProblem::Impl {
       out(r++) = (vs - st.v(leg_coord[static_cast<std::size_t>(row)])) / 1.0;
     }
     if (e == 0 || e == 2) {
-      // Lift-off: the unloading foot's whole wrench vanishes (the contact rows, which would all
-      // degenerate at zero force, are not sampled there).
+      // Lift-off: the unloading foot's wrench vanishes. Rows for its normal force and its two
+      // tipping moments (the moments come from its bushing, not from the load). Its shear and
+      // twist need no rows: the split shares them in proportion to the normal loads
+      // (distributeWrench), so they vanish with the normal force by construction, and rows for
+      // them had gradients of ~1e-5 of the others (singular values of the equality Jacobian
+      // 4e-6 against 65): SLSQP's steps to meet them were ~20 scaled units long, half of them
+      // rejected (measured, docs/history/planner.md).
+      // In the last stage scaled to the check's linear CoP form at zero load (a row at the
+      // solver's tolerance 1e-2 is 0.17 N of normal force and 0.014 N m of moment); earlier
+      // stages keep the weight's scale: tight rows from the first stage on left the 15 cm stage
+      // at 0.21 (measured, docs/history/planner.md).
       const int lifting = liftingFoot(e == 0 ? 0 : 2);
       const Eigen::Matrix3d Rt = st.sole[lifting].linear().transpose();
       const Eigen::Vector3d fo = Rt * st.wrench[lifting].tail<3>();
       const Eigen::Vector3d mo = Rt * st.wrench[lifting].head<3>();
-      // In the last stage scaled to the check's linear friction and CoP forms at zero load (a
-      // row at the solver's tolerance 1e-2 is 0.29 N of shear, 0.17 N of normal force and
-      // 0.014 N m of moment; the check allows |shear| + mu |Fz| <= 0.4 N there); at fo / mg
-      // (5.7 N) the 20 cm run ended with 1.8 N of pull at the second lift-off. Earlier stages
-      // keep the weight's scale: tight rows from the first stage on left the 15 cm stage at 0.21
-      // (measured, docs/planner.md). What remains at a lift-off is the lifting foot's
-      // acceleration jump (its leg changes representation there): ~0.25 N of shear from the
-      // ankle's inertial torque.
-      const double fs = finalBox() ? kLiftOffShear * mg : mg;
       const double fn = finalBox() ? kLiftOffNormal * mg : mg;
       const double ms = (finalBox() ? 0.5 : 1.0) * mg * kCopScale;
-      out(r++) = fo.x() / fs;
-      out(r++) = fo.y() / fs;
       out(r++) = fo.z() / fn;
-      for (int i = 0; i < 3; ++i) out(r++) = mo(i) / ms;
+      out(r++) = mo.x() / ms;
+      out(r++) = mo.y() / ms;
     }
   }
 

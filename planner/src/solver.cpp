@@ -364,6 +364,24 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
                          const std::atomic<bool>* stop, const Eigen::VectorXd* warm_start) {
   const auto start = Clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+  const WorkAccount work0 = problem.work();
+  PlanOutcome out;
+  // Runs `part` and adds its wall time, less the problem's own work inside it, to `own`.
+  auto accounted = [&](double& own, const auto& part) {
+    const WorkAccount w0 = problem.work();
+    const auto t0 = Clock::now();
+    auto result = part();
+    const WorkAccount& w1 = problem.work();
+    own += std::chrono::duration<double>(Clock::now() - t0).count() -
+           (w1.evaluate_s - w0.evaluate_s) - (w1.derivatives_s - w0.derivatives_s);
+    return result;
+  };
+  auto restore = [&](const Eigen::VectorXd& from, int iterations) {
+    return accounted(out.split.restoration, [&] {
+      return restoreFeasibility(problem, from, iterations, stop, on_restore,
+                                time_limit_s - elapsed());
+    });
+  };
   const PlannerConfig& cfg = problem.config();
   const double target_h = problem.obstacle().height;
   std::vector<double> boxes = cfg.cop_homotopy;
@@ -376,7 +394,6 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
   stages.emplace_back(target_h, boxes.front());
   for (std::size_t i = 1; i < boxes.size(); ++i) stages.emplace_back(target_h, boxes[i]);
 
-  PlanOutcome out;
   Eigen::VectorXd x;
   if (warm_start != nullptr) {
     if (warm_start->size() != problem.layout().total)
@@ -389,16 +406,14 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     stages.erase(stages.begin(), stages.end() - 1);
     problem.setDifficulty(stages.front().first, stages.front().second);
     if (on_stage) on_stage("warm start: restoring feasibility, then only the target stage");
-    const RestorationResult rest =
-        restoreFeasibility(problem, x, 60, stop, on_restore, time_limit_s - elapsed());
+    const RestorationResult rest = restore(x, 60);
     x = rest.x;
     out.iterations += rest.iterations;
   } else {
     problem.setDifficulty(stages.front().first, stages.front().second);
     x = problem.initialGuess();
     if (on_stage) on_stage("restoring feasibility of the kinematic guess (Levenberg-Marquardt)");
-    const RestorationResult rest =
-        restoreFeasibility(problem, x, 60, stop, on_restore, time_limit_s - elapsed());
+    const RestorationResult rest = restore(x, 60);
     x = rest.x;
     out.iterations += rest.iterations;
   }
@@ -418,8 +433,7 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     if (i > 0 && warm_start == nullptr) {
       // A harder stage starts infeasible (e.g. violations ~2 when the CoP box halves); SLSQP's
       // identity-Hessian steps from there wander (measured). Project back first.
-      const RestorationResult proj =
-          restoreFeasibility(problem, x, 40, stop, on_restore, time_limit_s - elapsed());
+      const RestorationResult proj = restore(x, 40);
       out.iterations += proj.iterations;
       x = proj.x;
     }
@@ -428,8 +442,10 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
       out.final.status = "time_limit";
       break;
     }
-    SolveResult r =
-        solver.solve(problem, x, static_cast<int>(i + 1), remaining, cfg.solver.max_iterations);
+    SolveResult r = accounted(out.split.nlopt, [&] {
+      return solver.solve(problem, x, static_cast<int>(i + 1), remaining,
+                          cfg.solver.max_iterations);
+    });
     out.iterations += r.iterations;
     x = r.x;
     out.final = r;
@@ -439,8 +455,7 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
       // (they end at a tenth of the tolerance or when no step reduces the violations; on the
       // 20 cm run 30 steps ended at 0.013 and 150 at 0.0137, still descending; measured,
       // docs/planner.md).
-      const RestorationResult polish = restoreFeasibility(problem, x, kPolishIterations, stop,
-                                                          on_restore, time_limit_s - elapsed());
+      const RestorationResult polish = restore(x, kPolishIterations);
       out.iterations += polish.iterations;
       x = polish.x;
       problem.evaluate(x, out.final.evaluation);
@@ -458,6 +473,11 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     out.final.status = "time_limit";
   }
   out.solve_time = elapsed();
+  const WorkAccount& work1 = problem.work();
+  out.split.evaluations = work1.evaluate_s - work0.evaluate_s;
+  out.split.derivatives = work1.derivatives_s - work0.derivatives_s;
+  out.split.other = out.solve_time - out.split.evaluations - out.split.derivatives -
+                    out.split.nlopt - out.split.restoration;
   const bool at_target = std::abs(problem.currentHeight() - target_h) < 1e-12 &&
                          std::abs(problem.currentCopBox() - cfg.cop_box) < 1e-12;
   out.valid = at_target && out.final.max_violation <= kFeasibilityTolerance;

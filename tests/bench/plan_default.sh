@@ -22,6 +22,9 @@ print(f"exit {sys.argv[2]}  wall {wall:.1f} s  valid {s.get('valid')}  iteration
 if s:
     print(f"duration {s['duration']:.3f} s  phases {[round(d, 3) for d in s['phase_durations']]}  "
           f"step length {s['step_length']:.3f} m  foot spacing {s['foot_spacing']:.3f} m")
+    t = s.get("time_split", {})
+    print("split  " + "  ".join(f"{k} {v:.1f} s" for k, v in t.items()) +
+          f"  ({s.get('jacobians')} Jacobians)")
 PY
 file=$(python3 -c "import json,sys; print(json.load(open('$out/summary.json')).get('file',''))" 2>/dev/null || true)
 [ -n "$file" ] && [ -f "$file" ] && "$bin" check "$file" | tail -n 14 || true

@@ -73,6 +73,14 @@ struct Evaluation {
   std::array<double, static_cast<int>(Family::kCount)> worst{};
 };
 
+/// Work done by the problem since its creation (wall time, s): what a solve spends where.
+struct WorkAccount {
+  int evaluations = 0;         ///< calls of evaluate() (trajectory evaluations by the solvers)
+  int jacobians = 0;           ///< calls of derivatives()
+  double evaluate_s = 0.0;     ///< in evaluate()
+  double derivatives_s = 0.0;  ///< in derivatives() (every column, all threads' wall time)
+};
+
 class OverstepProblem {
  public:
   OverstepProblem(const robots::WholeBodyModel& model, PlannerConfig config,
@@ -110,7 +118,9 @@ class OverstepProblem {
   /// point only moves the samples inside its B-spline support; columns split over threads.
   void derivatives(const Eigen::VectorXd& x, const Evaluation& at, Eigen::VectorXd& grad,
                    Eigen::MatrixXd& jac_ineq, Eigen::MatrixXd& jac_eq);
+  /// Trajectory evaluations of every kind, the finite-difference ones included.
   int evaluationCount() const;
+  const WorkAccount& work() const;
 
   /// "family at t = 1.234 s (phase name)" for a constraint row, using the durations of x.
   std::string describeRow(const Eigen::VectorXd& x, bool equality, int row) const;

@@ -49,11 +49,21 @@ std::unique_ptr<NlpSolver> makeNloptSolver(const SolverSettings& settings,
                                            std::function<void(const IterationInfo&)> on_iteration,
                                            const std::atomic<bool>* stop);
 
+/// Where a solve's wall time went (s); the parts add up to PlanOutcome::solve_time.
+struct TimeSplit {
+  double derivatives = 0.0;  ///< the problem's Jacobians (finite differences)
+  double evaluations = 0.0;  ///< the problem's trajectory evaluations (values only)
+  double nlopt = 0.0;        ///< inside the NLopt solver, between its calls to the problem
+  double restoration = 0.0;  ///< restoration's own linear algebra, between its calls
+  double other = 0.0;        ///< initial guess, set-up
+};
+
 struct PlanOutcome {
   bool valid = false;                 ///< every constraint family within the feasibility tolerance
   SolveResult final;                  ///< the last stage's result (best attempt)
   int iterations = 0;                 ///< over all stages
   double solve_time = 0.0;            ///< s
+  TimeSplit split;                    ///< of solve_time
   std::vector<std::string> violated;  ///< families still violated when not valid
 };
 
