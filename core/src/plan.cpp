@@ -37,7 +37,7 @@ Eigen::MatrixXd forceFirst(const Eigen::MatrixXd& w) {
 
 std::string num(double v) {
   char b[64];
-  std::snprintf(b, sizeof b, "%g", v);
+  std::snprintf(b, sizeof b, "%.10g", v);
   return b;
 }
 
@@ -192,14 +192,14 @@ void validatePlan(const Plan& p, const std::string& where) {
   if (p.phase.size() != n) fail("samples.phase", "expected " + std::to_string(n) + " indices");
   if (p.t(0) != 0.0) fail("samples.t[0]", "expected 0, got " + num(p.t(0)));
   const double max_step = 1.0 / p.rate + 1e-6;  // boundary samples lie between the grid's
+  const auto time = [&](int k) { return "samples.t[" + std::to_string(k) + "]"; };
   for (int k = 0; k < n; ++k) {
-    const std::string key = "samples.t[" + std::to_string(k) + "]";
-    if (!std::isfinite(p.t(k))) fail(key, "expected a finite time, got " + num(p.t(k)));
+    if (!std::isfinite(p.t(k))) fail(time(k), "expected a finite time, got " + num(p.t(k)));
     if (k > 0 && !(p.t(k) > p.t(k - 1)))
-      fail(key, "expected increasing times, got " + num(p.t(k)) + " after " + num(p.t(k - 1)));
+      fail(time(k), "expected increasing times, got " + num(p.t(k)) + " after " + num(p.t(k - 1)));
     if (k > 0 && !(p.t(k) - p.t(k - 1) <= max_step))
-      fail(key, "expected samples at most 1 / rate = " + num(1.0 / p.rate) + " s apart, got " +
-                    num(p.t(k)) + " after " + num(p.t(k - 1)));
+      fail(time(k), "expected samples at most 1 / rate = " + num(1.0 / p.rate) + " s apart, got " +
+                        num(p.t(k)) + " after " + num(p.t(k - 1)));
   }
   if (!(p.duration() <= Plan::kMaxDuration))
     fail("samples.t", "expected a duration of at most " + num(Plan::kMaxDuration) + " s, got " +
@@ -220,11 +220,14 @@ void validatePlan(const Plan& p, const std::string& where) {
       fail("samples.phase[" + std::to_string(k) + "]",
            "expected an index into phases, got " + std::to_string(p.phase(k)));
   for (const auto& [name, foot] :
-       {std::pair{"right_foot", &p.right_foot}, std::pair{"left_foot", &p.left_foot}})
+       {std::pair{"right_foot", &p.right_foot}, std::pair{"left_foot", &p.left_foot}}) {
+    if (foot->rows() != 7)
+      fail(std::string("samples.") + name, "expected 7 rows (x y z qw qx qy qz)");
     for (int k = 0; k < n; ++k)
       if (!(std::abs(foot->col(k).tail<4>().norm() - 1.0) <= 1e-3))
         fail(std::string("samples.") + name + "[" + std::to_string(k) + "]",
              "expected a unit quaternion, got norm " + num(foot->col(k).tail<4>().norm()));
+  }
   try {
     validate(p.obstacle);
   } catch (const InputError& e) {

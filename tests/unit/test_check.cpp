@@ -175,16 +175,16 @@ TEST_F(Check, CorruptPlanFilesAreBadInput) {
   EXPECT_THROW(core::loadPlan(dir.file("missing.json")), InputError);
 }
 
-// A knee 3 rad past its limit, checked at a rate whose grid overflowed an int (3e9 Hz: -2147483647
-// points, "VALID" after checking none) or that never ended (1e9 Hz): refused, as is any rate
-// outside (0, 10 kHz].
+// A knee 3 rad past its limit, checked at a rate whose grid overflowed an int (5e9 Hz on this
+// 0.5 s plan, 3e9 Hz on the 5.29 s default: a negative grid size, "VALID" after checking nothing)
+// or that never ended (1e9 Hz): refused, as is any rate outside (0, 10 kHz].
 TEST_F(Check, RatesOutsideTheGridCapAreRefusedNotPassed) {
   core::Plan p = *plan_;
   const auto& d = model_->description();
   const int knee = d.actuatedIndex("RLEG_JOINT3");
   p.q.row(model_->actuatedCoordinate(knee))
       .setConstant(d.actuated[static_cast<std::size_t>(knee)].upper + 3.0);
-  for (double rate : {3e9, 1e9, 2e4, 0.0, -1000.0, std::numeric_limits<double>::quiet_NaN(),
+  for (double rate : {5e9, 3e9, 1e9, 2e4, 0.0, -1000.0, std::numeric_limits<double>::quiet_NaN(),
                       std::numeric_limits<double>::infinity()}) {
     try {
       const CheckReport r = checkPlan(p, *model_, rate);
@@ -269,7 +269,8 @@ TEST_F(Check, PlanFilesWithAnOddTimeAxisAreRefused) {
       *plan_, [](std::string s) { return test::replaceOnce(s, "\"t\":[0.0,", "\"t\":[1e999,"); },
       "not a valid JSON plan file (number overflow parsing '1e999')");
   expectJsonRefused(
-      *plan_, [&](J& j) { j["rate"] = 1e9; }, "rate: expected a rate in (0, 10000] Hz, got 1e+09");
+      *plan_, [&](J& j) { j["rate"] = 1e9; },
+      "rate: expected a rate in (0, 10000] Hz, got 1000000000");
 }
 
 TEST_F(Check, PlanFilesWithBadPhasesOrValuesAreRefused) {
