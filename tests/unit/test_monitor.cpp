@@ -312,6 +312,33 @@ TEST(MonitorExport, UndecodablePayloadOfOurTypeIsABreak) {
   EXPECT_EQ(sum.rows.at("OVERSTEP_STATE"), 1);
 }
 
+// Issue 20: a state declaring -1 joints ended export with "internal error" (std::length_error).
+TEST(MonitorExport, ANegativeJointCountIsABreakAtItsEvent) {
+  TempDir dir;
+  const std::string path = dir.file("a.lcmlog");
+  std::int64_t bad_offset = 0;
+  {
+    lcm::LogFile file(path, "w");
+    auto put = [&](std::vector<std::uint8_t> data) {
+      lcm::LogEvent le{};
+      le.timestamp = 1;
+      le.channel = "OVERSTEP_STATE";
+      le.datalen = static_cast<int32_t>(data.size());
+      le.data = data.data();
+      file.writeEvent(&le);
+    };
+    put(test::encodeMsg(test::makeState(30)));
+    bad_offset = ftello(file.getFilePtr());
+    auto bad = test::encodeMsg(test::makeState(30));
+    std::fill(bad.begin() + 32, bad.begin() + 36, 0xff);  // num_joints = -1
+    put(bad);
+  }
+  const auto sum = monitor::exportCsv(path, dir.file("csv"), {});
+  EXPECT_EQ(sum.break_offset, bad_offset);
+  EXPECT_NE(sum.break_reason.find("does not decode"), std::string::npos) << sum.break_reason;
+  EXPECT_EQ(sum.rows.at("OVERSTEP_STATE"), 1);
+}
+
 TEST(MonitorRates, MatchTheLogsTimestamps) {
   TempDir dir;
   const SyntheticLog log = test::writeSyntheticLog(dir.file("a.lcmlog"), 2.0, 13);
