@@ -34,9 +34,9 @@ std::string LogReader::checkEvent(FILE* f, std::int64_t at, std::int64_t& end) c
   if (left < kHeaderBytes)
     return "truncated event header (" + std::to_string(left) + " bytes left)";
   unsigned char h[kHeaderBytes];
-  if (fseeko(f, at, SEEK_SET) != 0 || fread(h, 1, sizeof h, f) != sizeof h)
+  if (fseeko(f, at, SEEK_SET) != 0 || fread(h, 1, sizeof h, f) != sizeof h ||
+      fseeko(f, at, SEEK_SET) != 0)  // back to the event for liblcm
     return "unreadable event header";
-  if (fseeko(f, at, SEEK_SET) != 0) return "unreadable event header";
   if (static_cast<std::uint32_t>(bigEndian(h, 4)) != 0xEDA1DA01u) return "no sync word";
   const std::int64_t channel = bigEndian(h + 20, 4), data = bigEndian(h + 24, 4);
   if (channel <= 0 || channel >= 1000 || data < 0 || data > kMaxDataBytes)
@@ -71,7 +71,7 @@ bool LogReader::next(LogEvent& ev) {
     return false;
   }
   std::int64_t end = 0;
-  std::string problem = checkEvent(f, before, end);
+  const std::string problem = checkEvent(f, before, end);
   const lcm::LogEvent* e = problem.empty() ? log_->readNextEvent() : nullptr;
   if (e == nullptr) {
     // liblcm 1.3 also refuses an intact event that is not followed by a valid header or the end.
