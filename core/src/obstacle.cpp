@@ -14,16 +14,20 @@ std::string num(double v) {
   return b;
 }
 
+constexpr double kMaxSize = 100.0;  // m: beyond it the collision library's arithmetic breaks
+
 void positive(double v, const char* name) {
-  if (!std::isfinite(v) || !(v > 0.0)) {
-    throw InputError(std::string("obstacle ") + name + ": expected a positive length in m, got " +
+  if (!(v > 0.0 && v <= kMaxSize)) {
+    throw InputError(std::string("obstacle ") + name +
+                     ": expected a positive length in m (at most " + num(kMaxSize) + "), got " +
                      num(v));
   }
 }
 
 void nonNegative(double v, const char* name) {
-  if (!std::isfinite(v) || v < 0.0) {
-    throw InputError(std::string("obstacle ") + name + ": expected >= 0 m, got " + num(v));
+  if (!(v >= 0.0 && v <= kMaxSize)) {
+    throw InputError(std::string("obstacle ") + name + ": expected 0 to " + num(kMaxSize) +
+                     " m, got " + num(v));
   }
 }
 

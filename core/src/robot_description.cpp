@@ -185,8 +185,11 @@ RobotDescription loadRobotDescriptionAt(const std::string& yaml_path, int depth)
   d.floating_base =
       root["floating_base"] ? r.as<bool>(root["floating_base"], "floating_base") : true;
   d.gravity = r.numberOr(root, "gravity", "", 9.81);
-  if (!(d.gravity > 0.0)) r.fail("gravity", "expected > 0, got " + Reader::fmt(d.gravity));
+  if (!(d.gravity > 0.0 && d.gravity <= 100.0))
+    r.fail("gravity", "expected 0 < gravity <= 100 m/s^2, got " + Reader::fmt(d.gravity));
   d.acceleration_limit = r.numberOr(root, "acceleration_limit", "", 30.0);
+  if (!(d.acceleration_limit > 0.0))
+    r.fail("acceleration_limit", "expected > 0 rad/s^2, got " + Reader::fmt(d.acceleration_limit));
 
   const YAML::Node joints = r.need(root, "actuated_joints", "");
   if (!joints.IsSequence()) r.fail("actuated_joints", "expected a list");
@@ -197,8 +200,8 @@ RobotDescription loadRobotDescriptionAt(const std::string& yaml_path, int depth)
     a.name = r.as<std::string>(r.need(j, "name", w), w + ".name");
     const YAML::Node lim = r.need(j, "limits_deg", w);
     if (!lim.IsSequence() || lim.size() != 2) r.fail(w + ".limits_deg", "expected [lower, upper]");
-    a.lower = r.as<double>(lim[0], w + ".limits_deg") * kDeg;
-    a.upper = r.as<double>(lim[1], w + ".limits_deg") * kDeg;
+    a.lower = r.value(lim[0], w + ".limits_deg") * kDeg;  // finite: no .inf, no .nan
+    a.upper = r.value(lim[1], w + ".limits_deg") * kDeg;
     if (!(a.lower < a.upper))
       r.fail(w + ".limits_deg", "expected lower < upper, got [" + Reader::fmt(a.lower / kDeg) +
                                     ", " + Reader::fmt(a.upper / kDeg) + "]");
@@ -252,7 +255,10 @@ RobotDescription loadRobotDescriptionAt(const std::string& yaml_path, int depth)
     return false;
   };
 
-  if (const YAML::Node feet = root["feet"]) {
+  const YAML::Node feet = root["feet"];
+  if (!feet && d.floating_base)
+    r.fail("feet", "missing key (a floating-base robot stands on a right and a left foot)");
+  if (feet) {
     for (const char* side : {"right", "left"}) {
       const std::string w = std::string("feet.") + side;
       const YAML::Node f = r.need(feet, side, "feet");

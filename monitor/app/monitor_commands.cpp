@@ -26,6 +26,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
+/// JSON text of `j`. Channel names come from the log or the bus: invalid UTF-8 in them becomes
+/// U+FFFD instead of failing the dump ("internal error").
+std::string jsonText(const nlohmann::json& j, int indent = -1) {
+  return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
 double wallSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
@@ -88,7 +94,7 @@ struct MonitorOptions {
 void show(const monitor::Monitor& m, std::int64_t now, const std::string& src, bool json,
           bool tty) {
   if (json) {
-    std::cout << m.snapshot(now, src).dump() << std::endl;
+    std::cout << jsonText(m.snapshot(now, src)) << std::endl;
     return;
   }
   if (tty) std::cout << "\x1b[H\x1b[2J";
@@ -194,7 +200,7 @@ int runExport(const ExportOptions& o) {
     j["skipped"] = s.skipped;
     j["break_offset"] = s.break_offset;
     j["break_reason"] = s.break_reason;
-    std::cout << j.dump(2) << "\n";
+    std::cout << jsonText(j, 2) << "\n";
   } else {
     for (const auto& [ch, n] : s.rows)
       std::fprintf(stderr, "  %-24s %8lld rows -> %s\n", ch.c_str(), static_cast<long long>(n),
@@ -230,7 +236,7 @@ int runReport(const ReportCliOptions& o) {
     j["t_range"] = {s.t_begin, s.t_end};
     j["figures"] = s.figures;
     j["log_break_offset"] = s.log_break_offset;
-    std::cout << j.dump(2) << "\n";
+    std::cout << jsonText(j, 2) << "\n";
   } else {
     std::printf("report: %d ticks (plan time %.2f .. %.2f s), %zu figures -> %s\n", s.ticks,
                 s.t_begin, s.t_end, s.figures.size(), s.index_html.c_str());

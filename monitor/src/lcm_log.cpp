@@ -11,7 +11,8 @@ namespace overstep::monitor {
 
 namespace {
 constexpr std::int64_t kHeaderBytes = 4 + 8 + 8 + 4 + 4;  // sync, number, time, lengths
-}
+constexpr std::int64_t kMaxDataBytes = 64 << 20;  // our messages are ~1 kB; lcm-logger's < 4 GB
+}  // namespace
 
 namespace {
 
@@ -24,24 +25,29 @@ std::int64_t bigEndian(const unsigned char* p, int n) {
 
 }  // namespace
 
-/// Why liblcm returned nothing at `at`: looks at the event header there (for the message only;
-/// liblcm also refuses an intact event that is not followed by a valid header or the end).
-std::string LogReader::diagnose(FILE* f, std::int64_t at) const {
+/// Why the event at `at` cannot be read, from its header: "" when the header is sound and the
+/// whole event lies inside the file (`end`: the byte after it). Checked before liblcm reads the
+/// event, which allocates the declared data length + 1 first (0x7fffffff overflowed to a failed
+/// calloc, then a write through the null pointer: SIGSEGV on a 32-byte file).
+std::string LogReader::checkEvent(FILE* f, std::int64_t at, std::int64_t& end) const {
   const std::int64_t left = size_ - at;
   if (left < kHeaderBytes)
     return "truncated event header (" + std::to_string(left) + " bytes left)";
   unsigned char h[kHeaderBytes];
-  if (fseeko(f, at, SEEK_SET) != 0 || fread(h, 1, sizeof h, f) != sizeof h)
+  if (fseeko(f, at, SEEK_SET) != 0 || fread(h, 1, sizeof h, f) != sizeof h ||
+      fseeko(f, at, SEEK_SET) != 0)  // back to the event for liblcm
     return "unreadable event header";
   if (static_cast<std::uint32_t>(bigEndian(h, 4)) != 0xEDA1DA01u) return "no sync word";
   const std::int64_t channel = bigEndian(h + 20, 4), data = bigEndian(h + 24, 4);
-  if (channel <= 0 || channel >= 1000 || data < 0)
-    return "invalid channel or data length in the event header";
-  const std::int64_t end = at + kHeaderBytes + channel + data;
+  if (channel <= 0 || channel >= 1000 || data < 0 || data > kMaxDataBytes)
+    return "invalid channel length (" + std::to_string(channel) + ") or data length (" +
+           std::to_string(data) + ", at most " + std::to_string(kMaxDataBytes) +
+           ") in the event header";
+  end = at + kHeaderBytes + channel + data;
   if (end > size_)
     return "truncated event: it needs " + std::to_string(end - at) + " bytes, the file has " +
            std::to_string(left) + " left";
-  return "no valid event header at byte " + std::to_string(end) + " (after this event)";
+  return "";
 }
 
 LogReader::LogReader(const std::string& path) : path_(path) {
@@ -64,11 +70,16 @@ bool LogReader::next(LogEvent& ev) {
     done_ = true;
     return false;
   }
-  const lcm::LogEvent* e = log_->readNextEvent();
+  std::int64_t end = 0;
+  const std::string problem = checkEvent(f, before, end);
+  const lcm::LogEvent* e = problem.empty() ? log_->readNextEvent() : nullptr;
   if (e == nullptr) {
+    // liblcm 1.3 also refuses an intact event that is not followed by a valid header or the end.
     done_ = true;
     break_offset_ = before;
-    break_reason_ = diagnose(f, before);
+    break_reason_ = problem.empty() ? "no valid event header at byte " + std::to_string(end) +
+                                          " (after this event)"
+                                    : problem;
     return false;
   }
   const std::int64_t after = ftello(f);

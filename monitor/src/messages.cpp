@@ -169,11 +169,39 @@ void fields(const overstep::sim_status_t& m, Sink& s) {
   s.integer("rejected_commands", m.rejected_commands);
 }
 
+/// Byte offset of `num_joints` in the types with joint arrays (after the 8-byte fingerprint and
+/// the int64 fields before it; test_monitor checks both), -1 in the others.
+template <class T>
+constexpr int kJointCountAt = -1;
+template <>
+constexpr int kJointCountAt<overstep::robot_command_t> = 8 + 2 * 8;  // utime, seq
+template <>
+constexpr int kJointCountAt<overstep::robot_state_t> = 8 + 3 * 8;  // utime, seq, last_command_seq
+
+/// False when the declared joint count is negative or its arrays cannot fit in `size` bytes: the
+/// generated decoder resizes the arrays before it reads them (a negative count threw
+/// std::length_error, 2^26 joints in a 1 kB event allocated 512 MB).
+template <class T>
+bool jointCountFits(const unsigned char* b, int size) {
+  constexpr int at = kJointCountAt<T>;
+  if constexpr (at < 0) {
+    return true;
+  } else {
+    if (size < at + 4) return false;
+    const auto n =
+        static_cast<std::int32_t>((std::uint32_t{b[at]} << 24) | (std::uint32_t{b[at + 1]} << 16) |
+                                  (std::uint32_t{b[at + 2]} << 8) | std::uint32_t{b[at + 3]});
+    return n >= 0 && std::int64_t{n} * 8 <= size - at - 4;
+  }
+}
+
 template <class T>
 DecodeStatus tryDecode(const void* data, int size, std::int64_t hash, AnyMessage& out,
                        bool& matched) {
   if (matched || hash != T::getHash()) return DecodeStatus::UnknownType;
   matched = true;
+  if (!jointCountFits<T>(static_cast<const unsigned char*>(data), size))
+    return DecodeStatus::Malformed;
   T msg;
   if (msg.decode(data, 0, size) != size) return DecodeStatus::Malformed;
   out = std::move(msg);

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 
 #include "overstep/core/error.hpp"
@@ -12,6 +14,12 @@
 
 namespace overstep::planner {
 namespace {
+
+std::string fmt(double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.10g", v);
+  return b;
+}
 
 double jsonNumber(const nlohmann::json& j, const char* key, double fallback) {
   return j.contains(key) && j[key].is_number() ? j[key].get<double>() : fallback;
@@ -56,7 +64,10 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
     throw InputError("plan has " + std::to_string(plan.q.rows()) + " coordinates, robot has " +
                      std::to_string(model.dofs()));
   }
-  if (!(rate_hz > 0.0)) throw InputError("check rate: expected > 0 Hz");
+  if (!(rate_hz > 0.0 && rate_hz <= core::Plan::kMaxRate))
+    throw InputError("check rate: expected a rate in (0, " + fmt(core::Plan::kMaxRate) +
+                     "] Hz, got " + fmt(rate_hz));
+  core::validatePlan(plan, "plan '" + plan.robot_name + "'");
   nlohmann::json cfg = nlohmann::json::parse(plan.config_json, nullptr, false);
   if (cfg.is_discarded()) cfg = nlohmann::json::object();
   const double cop_half = 0.5 * jsonNumber(cfg, "cop_box", 0.01);
@@ -102,16 +113,22 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
   Eigen::Isometry3d anchor[2];
   bool anchored[2] = {false, false};
 
+  // The grid in 64 bits and capped: an int overflowed to a negative size and checked nothing.
   const double T = plan.duration();
-  const int n = static_cast<int>(std::floor(T * rate_hz)) + 1;
+  const double points = std::floor(T * rate_hz) + 1.0;
+  constexpr double kMaxPoints = core::Plan::kMaxDuration * core::Plan::kMaxRate + 1.0;
+  if (!(points >= 1.0 && points <= kMaxPoints))
+    throw InputError("check grid: " + fmt(points) + " points (duration x rate), expected at most " +
+                     fmt(kMaxPoints));
+  const auto n = static_cast<std::int64_t>(points);
   CheckReport report;
   report.rate = rate_hz;
-  report.grid_points = n;
+  report.grid_points = static_cast<int>(n);
   Tracker* all[] = {&cop, &fric, &uni, &clear, &obst, &self, &lim, &vel, &trq, &pel, &stance, &dyn};
   int k = 0;
-  for (int i = 0; i < n; ++i) {
+  for (std::int64_t i = 0; i < n; ++i) {
     for (Tracker* tr : all) tr->point = -std::numeric_limits<double>::infinity();
-    const double t = std::min(i / rate_hz, T);
+    const double t = std::min(static_cast<double>(i) / rate_hz, T);
     while (k + 1 < plan.samples() && plan.t(k + 1) <= t + 1e-12) ++k;
     const double tau_dt = t - plan.t(k);
     // Expansion from the sample at or before t with the acceleration varying linearly to the

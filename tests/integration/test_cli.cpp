@@ -1,6 +1,7 @@
 // The `overstep` front end as a user runs it: exit codes, one-line errors, JSON output.
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <nlohmann/json.hpp>
 
 #include "run_cli.hpp"
@@ -70,6 +71,92 @@ TEST(Cli, NegativeStiffnessIsBadInput) {
 TEST(Cli, UnknownSubcommandOrFlagIsBadInput) {
   expectOneLineError(run("fly"), 2, "error");
   expectOneLineError(run("model --frobnicate"), 2, "frobnicate");
+}
+
+// Issue 20: `overstep check` said VALID after checking a negative number of grid points (an int
+// overflow: --rate 5e9 on this 0.5 s plan, 3e9 on the 5.29 s default), never ended (--rate 1e9, a
+// last sample at 1e6 s), read phase index 0.7 as 0 and
+// ended "internal error" on a non-boolean contact flag. Each is now a one-line exit 2.
+TEST(Cli, CheckRefusesWhatItCannotCheckInFull) {
+  test::TempDir dir;
+  const std::string plan = dir.file("stand.json");
+  ASSERT_EQ(run("plan --stand 0.5 --out " + plan).code, 0);
+  EXPECT_EQ(run("check " + plan).code, 0);
+  for (const char* rate : {"5e9", "3e9", "1e9", "0", "-5"}) {
+    const RunResult r = run("check " + plan + " --rate " + rate);
+    expectOneLineError(r, 2, "check rate: expected a rate in (0, 10000] Hz");
+    EXPECT_LT(r.seconds, 30.0) << rate;
+  }
+  const auto edited = [&](const std::string& name,
+                          const std::function<void(nlohmann::json&)>& edit) {
+    nlohmann::json j = nlohmann::json::parse(test::slurp(plan));
+    edit(j);
+    test::writeText(dir.path() / name, j.dump());
+    return "check " + dir.file(name);
+  };
+  using J = nlohmann::json;
+  expectOneLineError(run(edited("late.json", [](J& j) { j["samples"]["t"].back() = 1e6; })), 2,
+                     "late.json: samples.t[100]: expected samples at most 1 / rate");
+  expectOneLineError(run(edited("phase.json", [](J& j) { j["samples"]["phase"][3] = 0.7; })), 2,
+                     "phase.json: samples.phase[3]: expected an integer in [0, 1), got 0.7");
+  expectOneLineError(run(edited("flag.json", [](J& j) { j["phases"][0]["right_contact"] = 1; })), 2,
+                     "flag.json: phases[0].right_contact: expected true or false, got 1");
+  test::writeText(dir.path() / "deep.json", std::string(60000, '[') + std::string(60000, ']'));
+  expectOneLineError(run("check " + dir.file("deep.json")), 2,
+                     "deep.json: JSON nested deeper than 16 levels");
+}
+
+// Issue 20: a 32-byte log declaring 0x7fffffff data bytes killed every log reader (SIGSEGV).
+TEST(Cli, LogReadersReportA32ByteLogAsDamaged) {
+  test::TempDir dir;
+  std::string log;  // big-endian: sync, event number, time, channel length, data length
+  const auto put = [&log](std::uint64_t v, int bytes) {
+    for (int i = bytes - 1; i >= 0; --i) log += static_cast<char>((v >> (8 * i)) & 0xff);
+  };
+  put(0xEDA1DA01u, 4);
+  put(0, 8);
+  put(0, 8);
+  put(1, 4);
+  put(0x7fffffff, 4);
+  log += "Axyz";  // the channel, 3 of the 2^31 - 1 data bytes
+  ASSERT_EQ(log.size(), 32u);
+  test::writeText(dir.path() / "a.lcmlog", log);
+  expectOneLineError(run("export " + dir.file("a.lcmlog") + " --csv " + dir.file("csv")), 2,
+                     "a.lcmlog: damaged at byte 0");
+  expectOneLineError(run("monitor " + dir.file("a.lcmlog") + " --once"), 2,
+                     "a.lcmlog: damaged at byte 0");
+}
+
+// Issue 20: a channel name that is not UTF-8 ended `export --json` with "internal error".
+TEST(Cli, ExportJsonSurvivesAChannelNameThatIsNotUtf8) {
+  test::TempDir dir;
+  std::string log;  // one event of a foreign type (8 zero bytes) on channel "\xff\xfe"
+  const auto put = [&log](std::uint64_t v, int bytes) {
+    for (int i = bytes - 1; i >= 0; --i) log += static_cast<char>((v >> (8 * i)) & 0xff);
+  };
+  put(0xEDA1DA01u, 4);
+  put(0, 8);
+  put(0, 8);
+  put(2, 4);
+  put(8, 4);
+  log += "\xff\xfe" + std::string(8, '\0');
+  test::writeText(dir.path() / "a.lcmlog", log);
+  const RunResult r =
+      run("export " + dir.file("a.lcmlog") + " --csv " + dir.file("csv") + " --json");
+  EXPECT_EQ(r.code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out, nullptr, false);
+  ASSERT_FALSE(j.is_discarded()) << r.out;
+  EXPECT_EQ(j["skipped"].size(), 1u) << r.out;
+}
+
+// Issue 20: a floating-base robot without `feet:` loaded, then `plan` and `check` crashed.
+TEST(Cli, ARobotWithoutFeetIsBadInput) {
+  test::TempDir dir;
+  test::writeText(dir.path() / "hrp2.urdf", test::slurp(test::hrp2Urdf()));
+  test::writeText(dir.path() / "hrp2.yaml",
+                  test::replaceOnce(test::slurp(test::hrp2Yaml()), "\nfeet:", "\nfeat:"));
+  expectOneLineError(run("model --robot " + dir.file("hrp2.yaml")), 2,
+                     "hrp2.yaml: feet: missing key");
 }
 
 }  // namespace

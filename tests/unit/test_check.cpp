@@ -1,8 +1,13 @@
 // `overstep check` (planner::checkPlan) and the plan file: accepts a consistent plan, names the
-// family a corruption breaks, refuses plans for another robot; files round-trip exactly.
+// family a corruption breaks, refuses plans for another robot and plan files or grid rates it
+// cannot check in full (issue 20); files round-trip exactly.
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <nlohmann/json.hpp>
 
 #include "overstep/core/error.hpp"
 #include "overstep/core/plan.hpp"
@@ -168,6 +173,162 @@ TEST_F(Check, CorruptPlanFilesAreBadInput) {
                   test::replaceOnce(text, "\"rate\":200.0", "\"rate\":-1"));
   EXPECT_THROW(core::loadPlan(dir.file("nan.json")), InputError);
   EXPECT_THROW(core::loadPlan(dir.file("missing.json")), InputError);
+}
+
+// A knee 3 rad past its limit, checked at a rate whose grid overflowed an int (5e9 Hz on this
+// 0.5 s plan, 3e9 Hz on the 5.29 s default: a negative grid size, "VALID" after checking nothing)
+// or that never ended (1e9 Hz): refused, as is any rate outside (0, 10 kHz].
+TEST_F(Check, RatesOutsideTheGridCapAreRefusedNotPassed) {
+  core::Plan p = *plan_;
+  const auto& d = model_->description();
+  const int knee = d.actuatedIndex("RLEG_JOINT3");
+  p.q.row(model_->actuatedCoordinate(knee))
+      .setConstant(d.actuated[static_cast<std::size_t>(knee)].upper + 3.0);
+  for (double rate : {5e9, 3e9, 1e9, 2e4, 0.0, -1000.0, std::numeric_limits<double>::quiet_NaN(),
+                      std::numeric_limits<double>::infinity()}) {
+    try {
+      const CheckReport r = checkPlan(p, *model_, rate);
+      ADD_FAILURE() << "rate " << rate << ": checked " << r.grid_points << " points, valid "
+                    << r.valid;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("check rate: expected a rate in (0, 10000] Hz"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  const CheckReport r = checkPlan(p, *model_, 10000.0);  // the cap itself is checked in full
+  EXPECT_EQ(r.grid_points, 5001);
+  EXPECT_FALSE(r.family("joint_limits")->ok());
+}
+
+// The fixture plan written to a file with one edit of its text, then read: a one-line InputError
+// naming the file and containing `expect`.
+void expectPlanRefused(const core::Plan& plan, const std::function<std::string(std::string)>& edit,
+                       const std::string& expect) {
+  test::TempDir dir;
+  core::savePlan(plan, dir.file("p.json"));
+  test::writeText(dir.path() / "bad.json", edit(test::slurp(dir.file("p.json"))));
+  try {
+    core::loadPlan(dir.file("bad.json"));
+    ADD_FAILURE() << "read a plan that should be refused with '" << expect << "'";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_EQ(msg.rfind(dir.file("bad.json") + ": ", 0), 0u) << msg;
+    EXPECT_NE(msg.find(expect), std::string::npos) << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    EXPECT_LT(msg.size(), 300u) << msg;
+  }
+}
+
+// The same with an edit of the parsed JSON.
+void expectJsonRefused(const core::Plan& plan, const std::function<void(nlohmann::json&)>& edit,
+                       const std::string& expect) {
+  expectPlanRefused(
+      plan,
+      [&](const std::string& text) {
+        nlohmann::json j = nlohmann::json::parse(text);
+        edit(j);
+        return j.dump();
+      },
+      expect);
+}
+
+TEST_F(Check, PlanFilesWithAnOddTimeAxisAreRefused) {
+  using J = nlohmann::json;
+  const auto times = [](J& j) -> J& { return j["samples"]["t"]; };
+  // The last sample at 1e308 (the grid size overflowed), 1e6 s (the check never ended).
+  expectJsonRefused(
+      *plan_, [&](J& j) { times(j).back() = 1e308; },
+      "samples.t[100]: expected samples at most 1 / rate = 0.005 s apart");
+  expectJsonRefused(
+      *plan_, [&](J& j) { times(j).back() = 1e6; }, "at most 1 / rate");
+  // Every time and the rate scaled: evenly spaced, but 1000 s long.
+  expectJsonRefused(
+      *plan_,
+      [&](J& j) {
+        for (J& t : times(j)) t = t.get<double>() * 2000.0;
+        j["rate"] = j["rate"].get<double>() / 2000.0;
+      },
+      "samples.t: expected a duration of at most 600 s, got 1000");
+  expectJsonRefused(
+      *plan_,
+      [&](J& j) {
+        for (J& t : times(j)) t = t.get<double>() + 1.0;
+      },
+      "samples.t[0]: expected 0, got 1");
+  expectJsonRefused(
+      *plan_,
+      [&](J& j) {
+        for (J& t : times(j)) t = t.get<double>() - 1.0;
+      },
+      "samples.t[0]: expected 0, got -1");
+  expectJsonRefused(
+      *plan_, [&](J& j) { times(j)[4] = times(j)[3]; },
+      "samples.t[4]: expected increasing times, got 0.015 after 0.015");
+  expectPlanRefused(
+      *plan_, [](std::string s) { return test::replaceOnce(s, "\"t\":[0.0,", "\"t\":[1e999,"); },
+      "not a valid JSON plan file (number overflow parsing '1e999')");
+  expectJsonRefused(
+      *plan_, [&](J& j) { j["rate"] = 1e9; },
+      "rate: expected a rate in (0, 10000] Hz, got 1000000000");
+}
+
+TEST_F(Check, PlanFilesWithBadPhasesOrValuesAreRefused) {
+  using J = nlohmann::json;
+  for (const J& index : {J(0.7), J(true), J(4294967296u), J(-1), J("0")})
+    expectJsonRefused(
+        *plan_, [&](J& j) { j["samples"]["phase"][7] = index; },
+        "samples.phase[7]: expected an integer in [0, 1), got " + index.dump());
+  expectJsonRefused(
+      *plan_, [](J& j) { j["phases"][0]["duration"] = -0.5; },
+      "phases[0].duration: expected [0, 600] s, got -0.5");
+  expectJsonRefused(
+      *plan_, [](J& j) { j["phases"][0]["right_contact"] = "yes"; },
+      "phases[0].right_contact: expected true or false, got \"yes\"");
+  expectJsonRefused(
+      *plan_, [](J& j) { j["samples"]["left_foot"][2] = {0, 0.1, 0, 0, 0, 0, 0}; },
+      "samples.left_foot[2]: expected a unit quaternion, got norm 0");
+  expectJsonRefused(
+      *plan_, [](J& j) { j["obstacle"]["height"] = 0.0; },
+      "obstacle height: expected a positive length");
+  expectJsonRefused(
+      *plan_, [](J& j) { j["obstacle"]["height"] = -0.2; },
+      "obstacle height: expected a positive length");
+  expectJsonRefused(
+      *plan_, [](J& j) { j["obstacle"]["width"] = 1e20; },
+      "obstacle width: expected a positive length in m (at most 100), got 1e+20");
+  expectJsonRefused(
+      *plan_, [](J& j) { j["obstacle"]["toes_x"] = 1e308; },
+      "obstacle.toes_x: expected within +-100 m, got 1e+308");
+  expectJsonRefused(
+      *plan_, [](J& j) { j["samples"]["q"][5][0] = 1e308; },
+      "samples.q[5]: expected numbers within +-1000, got 1e+308");
+  expectJsonRefused(
+      *plan_, [](J& j) { j["coordinates"][3] = 3; }, "coordinates: expected names, got 3");
+}
+
+// 60,000 nested brackets overflowed the stack in the JSON library: refused before parsing, also
+// inside a string-free corner nobody reads, while brackets inside strings do not count.
+TEST_F(Check, DeeplyNestedPlanFilesAreRefusedBeforeParsing) {
+  const std::string deep = std::string(60000, '[') + std::string(60000, ']');
+  expectPlanRefused(
+      *plan_,
+      [&](std::string s) {
+        return test::replaceOnce(s, "\"config\":{", "\"config\":{\"x\":" + deep + ",");
+      },
+      "JSON nested deeper than 16 levels");
+  expectPlanRefused(
+      *plan_,
+      [](std::string s) {
+        return test::replaceOnce(s, "{",
+                                 "{\"x\":" + std::string(17, '[') + std::string(17, ']') + ",");
+      },
+      "JSON nested deeper than 16 levels");
+  test::TempDir dir;
+  core::Plan p = *plan_;
+  p.robot_name = std::string(100, '[') + "\"{";
+  core::savePlan(p, dir.file("p.json"));
+  EXPECT_EQ(core::loadPlan(dir.file("p.json")).robot_name, p.robot_name);
 }
 
 }  // namespace

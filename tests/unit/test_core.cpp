@@ -90,6 +90,65 @@ TEST(RobotDescription, RejectsHalfSittingOutsideLimits) {
                   "outside its limits");
 }
 
+// Issue 20: a robot without feet loaded (then plan / check dereferenced the missing foot); infinite
+// limits, a negative acceleration limit and an absurd gravity passed; a key given twice was read
+// once (the first) and the second silently ignored.
+TEST(RobotDescription, RejectsAFloatingBaseWithoutFeet) {
+  expectYamlError("\nfeet:", "\nfee:", "hrp2.yaml: feet: missing key (a floating-base robot");
+}
+
+TEST(RobotDescription, RejectsNonFiniteLimits) {
+  expectYamlError("limits_deg: [-45, 30]", "limits_deg: [-.inf, 30]",
+                  "actuated_joints[0].limits_deg: expected a finite number, got -inf");
+  expectYamlError("limits_deg: [-45, 30]", "limits_deg: [-45, .inf]",
+                  "actuated_joints[0].limits_deg: expected a finite number, got inf");
+  expectYamlError("limits_deg: [-45, 30]", "limits_deg: [.nan, 30]",
+                  "actuated_joints[0].limits_deg: expected a finite number, got nan");
+}
+
+TEST(RobotDescription, RejectsANonPositiveAccelerationLimit) {
+  expectYamlError("acceleration_limit: 30.0", "acceleration_limit: -5",
+                  "acceleration_limit: expected > 0 rad/s^2, got -5");
+  expectYamlError("acceleration_limit: 30.0", "acceleration_limit: 0",
+                  "acceleration_limit: expected > 0 rad/s^2, got 0");
+}
+
+TEST(RobotDescription, RejectsAbsurdGravity) {
+  expectYamlError("gravity: 9.81", "gravity: 1e308",
+                  "gravity: expected 0 < gravity <= 100 m/s^2, got 1e+308");
+  expectYamlError("gravity: 9.81", "gravity: .nan", "gravity: expected a finite number, got nan");
+}
+
+TEST(RobotDescription, RejectsDuplicateKeys) {
+  expectYamlError("base_link: BODY", "base_link: BODY\nbase_link: CHEST",
+                  "hrp2.yaml: base_link: duplicate key (again at line 7)");
+  expectYamlError("stiffness: 707, damping: 10.0", "stiffness: 707, damping: 10.0, stiffness: 1",
+                  "elastic_joints[0].stiffness: duplicate key");
+}
+
+TEST(RobotDescription, RejectsYamlAliasesThatExpandBeyondTheFile) {
+  // "Billion laughs": 9 levels of 10 aliases each, 10^9 nodes from a few hundred bytes.
+  std::string yaml = "a0: &a0 [x]\n";
+  for (int i = 1; i < 10; ++i) {
+    yaml += "a" + std::to_string(i) + ": &a" + std::to_string(i) + " [";
+    for (int k = 0; k < 10; ++k) yaml += std::string(k ? ", " : "") + "*a" + std::to_string(i - 1);
+    yaml += "]\n";
+  }
+  TempDir dir;
+  test::writeText(dir.path() / "laughs.yaml", yaml);
+  try {
+    core::loadRobotDescription(dir.file("laughs.yaml"));
+    FAIL() << "loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("laughs.yaml: YAML aliases expand"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(RobotDescription, TheFixedBaseTwoLinkRobotNeedsNoFeet) {
+  EXPECT_TRUE(core::loadRobotDescription(test::twoLinkYaml()).feet.empty());
+}
+
 TEST(RobotDescription, RejectsMissingFile) {
   try {
     core::loadRobotDescription("/nonexistent/robot.yaml");

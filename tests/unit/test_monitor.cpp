@@ -1,5 +1,6 @@
 // Monitoring library: log reading and damaged logs, decoding, CSV export round trip, rates.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -86,6 +87,101 @@ TEST(MonitorLog, ReadsEveryEventWithItsOffset) {
 
 TEST(MonitorLog, MissingFileIsBadInput) {
   EXPECT_THROW(monitor::LogReader("/nonexistent/x.lcmlog"), InputError);
+}
+
+/// An lcm-logger event header (big-endian): sync word, event number, time, lengths.
+std::string eventHeader(std::int32_t channel_len, std::int32_t data_len) {
+  std::string h;
+  const auto put = [&h](std::uint64_t v, int bytes) {
+    for (int i = bytes - 1; i >= 0; --i) h += static_cast<char>((v >> (8 * i)) & 0xff);
+  };
+  put(0xEDA1DA01u, 4);
+  put(0, 8);
+  put(1'700'000'000'000'000, 8);
+  put(static_cast<std::uint32_t>(channel_len), 4);
+  put(static_cast<std::uint32_t>(data_len), 4);
+  return h;
+}
+
+// Issue 20: liblcm allocates the declared data length + 1 before reading; 0x7fffffff overflowed
+// to a failed calloc and a write through the null pointer (SIGSEGV in export, monitor, identify,
+// report). Now a break at the event, naming the lengths.
+TEST(MonitorLog, A32ByteLogDeclaringTwoGigabytesIsABreakNotACrash) {
+  TempDir dir;
+  test::writeText(dir.path() / "a.lcmlog", eventHeader(1, 0x7fffffff) + "A" + "xyz");
+  ASSERT_EQ(std::filesystem::file_size(dir.file("a.lcmlog")), 32u);
+  monitor::LogReader r(dir.file("a.lcmlog"));
+  monitor::LogEvent ev;
+  EXPECT_FALSE(r.next(ev));
+  EXPECT_TRUE(r.broken());
+  EXPECT_EQ(r.breakOffset(), 0);
+  EXPECT_NE(r.breakReason().find("data length (2147483647, at most 67108864)"), std::string::npos)
+      << r.breakReason();
+  for (const std::int32_t data : {-5, 0x7fffffff}) {
+    test::writeText(dir.path() / "b.lcmlog", eventHeader(1, data) + "A" + "xyz");
+    monitor::LogReader b(dir.file("b.lcmlog"));
+    EXPECT_FALSE(b.next(ev));
+    EXPECT_EQ(b.breakOffset(), 0);
+  }
+  test::writeText(dir.path() / "c.lcmlog", eventHeader(1, 100) + "A" + "xyz");
+  monitor::LogReader c(dir.file("c.lcmlog"));
+  EXPECT_FALSE(c.next(ev));
+  EXPECT_NE(c.breakReason().find("truncated event: it needs 129 bytes, the file has 32 left"),
+            std::string::npos)
+      << c.breakReason();
+}
+
+// The same length after intact events, in a (sparse) file long enough to hold it: refused by the
+// 64 MiB cap, the events before it read.
+TEST(MonitorLog, AnEventLongerThanTheCapIsABreakAtItsOffset) {
+  TempDir dir;
+  const SyntheticLog log = test::writeSyntheticLog(dir.file("a.lcmlog"), 0.1, 3);
+  const auto bad = static_cast<std::int64_t>(std::filesystem::file_size(dir.file("a.lcmlog")));
+  {
+    std::ofstream f(dir.file("a.lcmlog"), std::ios::app | std::ios::binary);
+    f << eventHeader(14, 0x7fffffff) << "OVERSTEP_STATE";
+  }
+  std::filesystem::resize_file(dir.file("a.lcmlog"), (std::uintmax_t{1} << 31) + 4096);
+  monitor::LogReader r(dir.file("a.lcmlog"));
+  monitor::LogEvent ev;
+  std::size_t n = 0;
+  while (r.next(ev)) ++n;
+  EXPECT_EQ(n, log.events.size());
+  EXPECT_EQ(r.breakOffset(), bad);
+  EXPECT_NE(r.breakReason().find("data length (2147483647"), std::string::npos) << r.breakReason();
+}
+
+long peakRssKb() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss;
+}
+
+// Issue 20: the generated decoders resize the joint arrays to the declared count before reading
+// them: a negative count threw std::length_error (exit 1), 2^26 joints in a 1 kB event allocated
+// 512 MB. Now Malformed before anything is allocated (and the count's offset is the right one: a
+// valid message still decodes).
+TEST(MonitorDecode, JointCountsTheBytesCannotHoldAreMalformedBeforeAllocating) {
+  struct Case {
+    std::vector<std::uint8_t> bytes;
+    int at;  // offset of num_joints
+  };
+  for (Case c : {Case{test::encodeMsg(test::makeState(30)), 32},
+                 Case{test::encodeMsg(test::makeCommand(30)), 24}}) {
+    monitor::AnyMessage m;
+    ASSERT_EQ(monitor::decode(c.bytes.data(), static_cast<int>(c.bytes.size()), m),
+              monitor::DecodeStatus::Ok);
+    ASSERT_EQ(c.bytes[static_cast<std::size_t>(c.at) + 3], 30);  // big-endian int32 30
+    const long before = peakRssKb();
+    for (const std::uint32_t n : {0xffffffffu, 0x80000000u, 0x7fffffffu, 1u << 26}) {
+      for (int i = 0; i < 4; ++i)
+        c.bytes[static_cast<std::size_t>(c.at + i)] = static_cast<std::uint8_t>(n >> (24 - 8 * i));
+      EXPECT_EQ(monitor::decode(c.bytes.data(), static_cast<int>(c.bytes.size()), m),
+                monitor::DecodeStatus::Malformed)
+          << n;
+    }
+    EXPECT_LT(peakRssKb() - before, 64 * 1024) << "kB allocated for a 1 kB message";
+  }
 }
 
 TEST(MonitorDecode, KnowsOurTypesAndRejectsOthers) {
@@ -213,6 +309,33 @@ TEST(MonitorExport, UndecodablePayloadOfOurTypeIsABreak) {
   }
   const auto sum = monitor::exportCsv(path, dir.file("csv"), {});
   EXPECT_EQ(sum.break_offset, bad_offset);
+  EXPECT_EQ(sum.rows.at("OVERSTEP_STATE"), 1);
+}
+
+// Issue 20: a state declaring -1 joints ended export with "internal error" (std::length_error).
+TEST(MonitorExport, ANegativeJointCountIsABreakAtItsEvent) {
+  TempDir dir;
+  const std::string path = dir.file("a.lcmlog");
+  std::int64_t bad_offset = 0;
+  {
+    lcm::LogFile file(path, "w");
+    auto put = [&](std::vector<std::uint8_t> data) {
+      lcm::LogEvent le{};
+      le.timestamp = 1;
+      le.channel = "OVERSTEP_STATE";
+      le.datalen = static_cast<int32_t>(data.size());
+      le.data = data.data();
+      file.writeEvent(&le);
+    };
+    put(test::encodeMsg(test::makeState(30)));
+    bad_offset = ftello(file.getFilePtr());
+    auto bad = test::encodeMsg(test::makeState(30));
+    std::fill(bad.begin() + 32, bad.begin() + 36, 0xff);  // num_joints = -1
+    put(bad);
+  }
+  const auto sum = monitor::exportCsv(path, dir.file("csv"), {});
+  EXPECT_EQ(sum.break_offset, bad_offset);
+  EXPECT_NE(sum.break_reason.find("does not decode"), std::string::npos) << sum.break_reason;
   EXPECT_EQ(sum.rows.at("OVERSTEP_STATE"), 1);
 }
 

@@ -208,5 +208,18 @@ TEST(Obstacle, RejectsBadSizes) {
   EXPECT_EQ(core::parseObstacleShape("cylinder"), core::ObstacleSpec::Shape::Cylinder);
 }
 
+// Issue 20: a 1e20 m wide bar reached FCL (an exception: exit 1); every size is capped at 100 m.
+TEST(Obstacle, RejectsSizesBeyondAHundredMetres) {
+  for (double core::ObstacleSpec::*field :
+       {&core::ObstacleSpec::height, &core::ObstacleSpec::width, &core::ObstacleSpec::length,
+        &core::ObstacleSpec::gap, &core::ObstacleSpec::margin}) {
+    core::ObstacleSpec s;
+    s.*field = 1e20;
+    EXPECT_THROW(core::validate(s), InputError);
+    s.*field = 100.0;  // a box: no cylinder rule
+    EXPECT_NO_THROW(core::validate(s));
+  }
+}
+
 }  // namespace
 }  // namespace overstep::planner

@@ -29,7 +29,8 @@ ObstacleSpec::Shape parseObstacleShape(const std::string& name);
 const char* obstacleShapeName(ObstacleSpec::Shape shape);
 
 /// Throws InputError (one line naming the field) for non-finite, non-positive height/width/length,
-/// negative gap or margin, or a cylinder whose diameter exceeds its height.
+/// negative gap or margin, any of them above 100 m, or a cylinder whose diameter exceeds its
+/// height.
 void validate(const ObstacleSpec& spec);
 
 }  // namespace overstep::core

@@ -27,6 +27,10 @@ struct Plan {
   /// feet's J^T f); version 1 files held the torques of the robot hanging from its pelvis and
   /// are refused.
   static constexpr int kFormatVersion = 2;
+  /// Bounds of a trustworthy plan: a motion of at most kMaxDuration s sampled at most at
+  /// kMaxRate Hz (the check's grid, at most the same rate, then has at most 6e6 points).
+  static constexpr double kMaxDuration = 600.0;  ///< s
+  static constexpr double kMaxRate = 10000.0;    ///< Hz
 
   std::string robot_name;
   std::string robot_file;
@@ -64,10 +68,18 @@ struct Plan {
   void resize(int n, int dofs, int actuated);
 };
 
+/// Throws InputError "where: key: expected ..., got ..." unless the plan's layout can be trusted:
+/// rate in (0, kMaxRate], at least 2 samples and every array as long, times from 0, finite,
+/// strictly increasing, at most 1 / rate apart (the samples are at k / rate plus the phase
+/// boundaries), duration <= kMaxDuration, phases with start and duration in [0, kMaxDuration],
+/// phase indices in range, unit foot quaternions, a valid obstacle (core::validate).
+void validatePlan(const Plan& plan, const std::string& where);
+
 /// Writes the plan atomically (temporary file in the same directory, then rename).
 void savePlan(const Plan& plan, const std::string& path);
-/// Reads and validates a plan file (format, version, array sizes, finite values). InputError on
-/// any problem, one line naming the file and the field.
+/// Reads and validates a plan file (JSON nested at most 16 deep, format, version, types, array
+/// sizes, finite values within physical bounds, then validatePlan). InputError on any problem,
+/// one line naming the file and the field.
 Plan loadPlan(const std::string& path);
 
 /// Writes `text` to `path` atomically: a temporary file beside it, flushed, then renamed over.

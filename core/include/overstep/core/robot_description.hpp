@@ -145,8 +145,10 @@ struct RobotDescription {
 /// YAML it modifies; docs/model-overlay.md): the base is loaded, then the overlay's elastic
 /// joint parameters replace the base's and its effects are recorded; the hash covers both files.
 /// Throws InputError with a one-line message naming the file and
-/// the offending key on a missing file, malformed YAML, a missing key or an invalid value
-/// (negative stiffness, inverted limits, half-sitting outside the limits, ...).
+/// the offending key on a missing file, malformed YAML, a key given twice, a missing key (`feet`
+/// is required for a floating base) or an invalid value (negative stiffness, inverted or
+/// non-finite limits, half-sitting outside the limits, acceleration limit <= 0, gravity outside
+/// (0, 100] m/s^2, ...).
 RobotDescription loadRobotDescription(const std::string& yaml_path);
 
 /// 64-bit FNV-1a hash of a byte string (stable across platforms), for content fingerprints.

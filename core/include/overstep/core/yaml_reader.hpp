@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <initializer_list>
+#include <set>
 #include <string>
 #include <type_traits>
 
@@ -27,14 +28,19 @@ class YamlReader {
   /// Reads and parses a whole YAML file; a missing file or malformed YAML is an InputError
   /// naming the file (and the line).
   static YAML::Node loadFile(const std::string& path) { return parse(readFile(path), path); }
-  /// Parses YAML text read from `path` (named in the error).
+  /// Parses YAML text read from `path` (named in the error). A key given twice in a map is
+  /// refused (yaml-cpp keeps both and every reader would take the first).
   static YAML::Node parse(const std::string& text, const std::string& path) {
+    YAML::Node root;
     try {
-      return YAML::Load(text);
+      root = YAML::Load(text);
     } catch (const YAML::Exception& e) {
       throw InputError(path + ": malformed YAML at line " + std::to_string(e.mark.line + 1) + ": " +
                        e.msg);
     }
+    std::size_t budget = text.size() + 1;  // nodes: more only through aliases (billion laughs)
+    refuseDuplicateKeys(root, path, "", budget);
+    return root;
   }
 
   [[noreturn]] void fail(const std::string& key, const std::string& msg) const {
@@ -124,6 +130,23 @@ class YamlReader {
   }
   static std::string join(const std::string& where, const std::string& name) {
     return where.empty() ? name : where + "." + name;
+  }
+  static void refuseDuplicateKeys(const YAML::Node& n, const std::string& path,
+                                  const std::string& where, std::size_t& budget) {
+    if (budget-- == 0)
+      throw InputError(path + ": YAML aliases expand to more nodes than it has bytes");
+    if (n.IsSequence())
+      for (std::size_t i = 0; i < n.size(); ++i)
+        refuseDuplicateKeys(n[i], path, where + "[" + std::to_string(i) + "]", budget);
+    if (!n.IsMap()) return;
+    std::set<std::string> seen;
+    for (const auto& kv : n) {
+      const std::string key = join(where, scalarText(kv.first));
+      if (kv.first.IsScalar() && !seen.insert(kv.first.Scalar()).second)
+        throw InputError(path + ": " + key + ": duplicate key (again at line " +
+                         std::to_string(kv.first.Mark().line + 1) + ")");
+      refuseDuplicateKeys(kv.second, path, key, budget);
+    }
   }
   static std::string scalarText(const YAML::Node& n) {
     if (n.IsScalar()) return n.Scalar();

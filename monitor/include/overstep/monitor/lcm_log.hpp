@@ -5,7 +5,9 @@
 /// nothing on a short read or when an event is not followed by a valid header (1.3), or skips
 /// bytes to the next sync word (newer versions); each is reported here as a break (the offset of
 /// the first event not returned, and the reason, naming the damaged byte where it can) instead of
-/// passing silently, and reading stops there, so everything before the break is intact.
+/// passing silently, and reading stops there, so everything before the break is intact. Every
+/// event's header is checked before liblcm reads it (sync word, channel length 1..999, data length
+/// at most 64 MiB, the event inside the file), so no declared length is allocated unchecked.
 
 #include <cstdint>
 #include <cstdio>
@@ -45,7 +47,7 @@ class LogReader {
   const std::string& path() const { return path_; }
 
  private:
-  std::string diagnose(FILE* f, std::int64_t at) const;
+  std::string checkEvent(FILE* f, std::int64_t at, std::int64_t& end) const;
   std::string path_;
   std::unique_ptr<lcm::LogFile> log_;
   std::int64_t size_ = 0;

@@ -32,7 +32,8 @@ const std::vector<std::string>& knownTypeNames();
 enum class DecodeStatus { Ok, UnknownType, Malformed };
 
 /// Decodes `size` bytes. UnknownType: the fingerprint is none of ours (another program's type,
-/// or a log written with another schema); Malformed: ours, but the bytes do not decode.
+/// or a log written with another schema); Malformed: ours, but the bytes do not decode (a joint
+/// count that is negative or more than the bytes can hold is refused before anything is allocated).
 DecodeStatus decode(const void* data, int size, AnyMessage& out);
 
 /// One flattened field.
