@@ -512,6 +512,9 @@ int runReplay(const ReplayCliOptions& o) {
   ro.rate = o.rate;
   ro.stabilizer = !o.no_stabilizer;
   ro.watchdog_periods = o.watchdog;
+  // The lcm clock ticks on the robot's states, and on the watchdog's timeout without one: the
+  // plan follows the states' time stamps. (Lockstep answers every state once, a period each.)
+  ro.robot_clock = clock == Clock::Lcm;
   ReplayProcess p(o, clock, track, params, ro);
   const cli::StopSignals stop;
   if (!o.quiet)

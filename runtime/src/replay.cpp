@@ -136,12 +136,19 @@ FaultReason Replay::validate(const core::RobotState& st) const {
 const TickOutput& Replay::tick(const core::RobotState* state) {
   const double dt = 1.0 / opt_.rate;
   ++ticks_;
+  // How far the plan advances this tick: a period, or with the robot's clock the time since the
+  // last state (none without a state; at most the watchdog's span, beyond which it holds).
+  double advance = opt_.robot_clock ? 0.0 : dt;
   if (state) {
     const FaultReason f = validate(*state);
     if (f != FaultReason::None) {
       enterHold(f);
     } else {
+      if (opt_.robot_clock && have_state_)
+        advance = std::clamp(static_cast<double>(state->utime - last_utime_) * 1e-6, 0.0,
+                             opt_.watchdog_periods * dt);
       last_state_ = *state;  // same sizes: no allocation
+      last_utime_ = state->utime;
       have_state_ = true;
       missed_ = 0;
     }
@@ -162,7 +169,8 @@ const TickOutput& Replay::tick(const core::RobotState* state) {
       }
       break;
     case State::MovingToStart:
-      if (++move_k_ >= static_cast<int>(std::ceil(move_T_ * opt_.rate))) {
+      if (advance > 0.0) ++move_k_;
+      if (move_k_ >= static_cast<int>(std::ceil(move_T_ * opt_.rate))) {
         out_.state = State::Running;
         plan_time_ = 0.0;
         if (opt_.stabilizer) {
@@ -172,7 +180,7 @@ const TickOutput& Replay::tick(const core::RobotState* state) {
       }
       break;
     case State::Running:
-      plan_time_ += dt;
+      plan_time_ += advance;
       if (plan_time_ >= track_.duration()) {
         plan_time_ = track_.duration();
         out_.state = State::Finished;

@@ -106,19 +106,26 @@ TEST(Cli, CheckRefusesWhatItCannotCheckInFull) {
                      "deep.json: JSON nested deeper than 16 levels");
 }
 
-// Issue 20: a 32-byte log declaring 0x7fffffff data bytes killed every log reader (SIGSEGV).
-TEST(Cli, LogReadersReportA32ByteLogAsDamaged) {
-  test::TempDir dir;
-  std::string log;  // big-endian: sync, event number, time, channel length, data length
-  const auto put = [&log](std::uint64_t v, int bytes) {
-    for (int i = bytes - 1; i >= 0; --i) log += static_cast<char>((v >> (8 * i)) & 0xff);
+/// An LCM log event header (big-endian: sync word, event number 0, time 0, channel length, data
+/// length), for logs written byte by byte.
+std::string rawEventHeader(std::uint32_t channel_length, std::uint32_t data_length) {
+  std::string h;
+  const auto put = [&h](std::uint64_t v, int bytes) {
+    for (int i = bytes - 1; i >= 0; --i) h += static_cast<char>((v >> (8 * i)) & 0xff);
   };
   put(0xEDA1DA01u, 4);
   put(0, 8);
   put(0, 8);
-  put(1, 4);
-  put(0x7fffffff, 4);
-  log += "Axyz";  // the channel, 3 of the 2^31 - 1 data bytes
+  put(channel_length, 4);
+  put(data_length, 4);
+  return h;
+}
+
+// Issue 20: a 32-byte log declaring 0x7fffffff data bytes killed every log reader (SIGSEGV).
+TEST(Cli, LogReadersReportA32ByteLogAsDamaged) {
+  test::TempDir dir;
+  // The channel "A" and 3 of the 2^31 - 1 data bytes it declares.
+  const std::string log = rawEventHeader(1, 0x7fffffff) + "Axyz";
   ASSERT_EQ(log.size(), 32u);
   test::writeText(dir.path() / "a.lcmlog", log);
   expectOneLineError(run("export " + dir.file("a.lcmlog") + " --csv " + dir.file("csv")), 2,
@@ -130,16 +137,8 @@ TEST(Cli, LogReadersReportA32ByteLogAsDamaged) {
 // Issue 20: a channel name that is not UTF-8 ended `export --json` with "internal error".
 TEST(Cli, ExportJsonSurvivesAChannelNameThatIsNotUtf8) {
   test::TempDir dir;
-  std::string log;  // one event of a foreign type (8 zero bytes) on channel "\xff\xfe"
-  const auto put = [&log](std::uint64_t v, int bytes) {
-    for (int i = bytes - 1; i >= 0; --i) log += static_cast<char>((v >> (8 * i)) & 0xff);
-  };
-  put(0xEDA1DA01u, 4);
-  put(0, 8);
-  put(0, 8);
-  put(2, 4);
-  put(8, 4);
-  log += "\xff\xfe" + std::string(8, '\0');
+  // One event of a foreign type (8 zero bytes) on channel "\xff\xfe".
+  const std::string log = rawEventHeader(2, 8) + "\xff\xfe" + std::string(8, '\0');
   test::writeText(dir.path() / "a.lcmlog", log);
   const RunResult r =
       run("export " + dir.file("a.lcmlog") + " --csv " + dir.file("csv") + " --json");

@@ -286,29 +286,33 @@ TEST(MonitorExport, CorruptSyncWordIsReportedAtItsOffset) {
       << sum.break_reason;
 }
 
+/// Writes one OVERSTEP_STATE event per payload into a log at `path`; returns the file offset of
+/// each event.
+std::vector<std::int64_t> writeStateEvents(const std::string& path,
+                                           std::vector<std::vector<std::uint8_t>> payloads) {
+  std::vector<std::int64_t> offsets;
+  lcm::LogFile file(path, "w");
+  for (auto& data : payloads) {
+    offsets.push_back(ftello(file.getFilePtr()));
+    lcm::LogEvent le{};
+    le.timestamp = 1;
+    le.channel = "OVERSTEP_STATE";
+    le.datalen = static_cast<int32_t>(data.size());
+    le.data = data.data();
+    file.writeEvent(&le);
+  }
+  return offsets;
+}
+
 TEST(MonitorExport, UndecodablePayloadOfOurTypeIsABreak) {
   TempDir dir;
   const std::string path = dir.file("a.lcmlog");
-  std::int64_t bad_offset = 0;
-  {
-    lcm::LogFile file(path, "w");
-    auto put = [&](std::vector<std::uint8_t> data) {
-      lcm::LogEvent le{};
-      le.timestamp = 1;
-      le.channel = "OVERSTEP_STATE";
-      le.datalen = static_cast<int32_t>(data.size());
-      le.data = data.data();
-      file.writeEvent(&le);
-    };
-    put(test::encodeMsg(test::makeState(30)));
-    bad_offset = ftello(file.getFilePtr());
-    auto cut = test::encodeMsg(test::makeState(30));
-    cut.resize(cut.size() / 2);  // our fingerprint, half a message
-    put(cut);
-    put(test::encodeMsg(test::makeState(30)));
-  }
+  auto cut = test::encodeMsg(test::makeState(30));
+  cut.resize(cut.size() / 2);  // our fingerprint, half a message
+  const std::vector<std::int64_t> at = writeStateEvents(
+      path, {test::encodeMsg(test::makeState(30)), cut, test::encodeMsg(test::makeState(30))});
   const auto sum = monitor::exportCsv(path, dir.file("csv"), {});
-  EXPECT_EQ(sum.break_offset, bad_offset);
+  EXPECT_EQ(sum.break_offset, at[1]);
   EXPECT_EQ(sum.rows.at("OVERSTEP_STATE"), 1);
 }
 
@@ -316,25 +320,12 @@ TEST(MonitorExport, UndecodablePayloadOfOurTypeIsABreak) {
 TEST(MonitorExport, ANegativeJointCountIsABreakAtItsEvent) {
   TempDir dir;
   const std::string path = dir.file("a.lcmlog");
-  std::int64_t bad_offset = 0;
-  {
-    lcm::LogFile file(path, "w");
-    auto put = [&](std::vector<std::uint8_t> data) {
-      lcm::LogEvent le{};
-      le.timestamp = 1;
-      le.channel = "OVERSTEP_STATE";
-      le.datalen = static_cast<int32_t>(data.size());
-      le.data = data.data();
-      file.writeEvent(&le);
-    };
-    put(test::encodeMsg(test::makeState(30)));
-    bad_offset = ftello(file.getFilePtr());
-    auto bad = test::encodeMsg(test::makeState(30));
-    std::fill(bad.begin() + 32, bad.begin() + 36, 0xff);  // num_joints = -1
-    put(bad);
-  }
+  auto bad = test::encodeMsg(test::makeState(30));
+  std::fill(bad.begin() + 32, bad.begin() + 36, 0xff);  // num_joints = -1
+  const std::vector<std::int64_t> at =
+      writeStateEvents(path, {test::encodeMsg(test::makeState(30)), bad});
   const auto sum = monitor::exportCsv(path, dir.file("csv"), {});
-  EXPECT_EQ(sum.break_offset, bad_offset);
+  EXPECT_EQ(sum.break_offset, at[1]);
   EXPECT_NE(sum.break_reason.find("does not decode"), std::string::npos) << sum.break_reason;
   EXPECT_EQ(sum.rows.at("OVERSTEP_STATE"), 1);
 }

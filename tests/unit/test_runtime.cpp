@@ -228,6 +228,43 @@ TEST_F(RuntimeTest, LifecycleRunsThePlanToTheEnd) {
   EXPECT_LT((r.output().command.q_ref - track.makeSample().q).norm(), 1e-3);
 }
 
+// With the robot's clock (lcm, lockstep) the plan advances by the states' time stamps: the
+// watchdog's tick without a state holds the plan's time, a late state after a lost one catches
+// up both periods, a repeated time stamp advances nothing. The timer clock advances a period a
+// tick whatever arrives (measured under load: 16 watchdog ticks ran the plan 80 ms ahead of the
+// robot in a 1.5 s lcm-clock replay).
+TEST_F(RuntimeTest, RobotClockPacesThePlanByTheStatesTimeStamps) {
+  runtime::PlanTrack track(*plan_, *model_);
+  runtime::ReplayOptions o = fastOptions();
+  o.robot_clock = true;
+  runtime::Replay r(track, params(), o);
+  core::RobotState st = perfectState(*plan_, 0);
+  st.utime = 1000000;
+  const std::int64_t period_us = 5000;  // 200 Hz
+  tickP(r, &st);
+  r.start();
+  for (int i = 0; i < 2000 && r.state() != State::Running; ++i) {
+    st.utime += period_us;
+    tickP(r, &st);
+  }
+  ASSERT_EQ(r.state(), State::Running) << runtime::toString(r.fault());
+  st.utime += period_us;
+  const double p0 = tickP(r, &st).plan_time;
+  EXPECT_DOUBLE_EQ(tickP(r, nullptr).plan_time, p0) << "a tick without a state held the plan";
+  st.utime += 2 * period_us;  // the late state, one lost before it
+  EXPECT_NEAR(tickP(r, &st).plan_time, p0 + 0.010, 1e-12);
+  EXPECT_NEAR(tickP(r, &st).plan_time, p0 + 0.010, 1e-12) << "same time stamp, same plan time";
+  EXPECT_EQ(r.state(), State::Running);
+  // The timer clock: a period a tick, with or without a state.
+  runtime::Replay t(track, params(), fastOptions());
+  tickP(t, &st);
+  t.start();
+  for (int i = 0; i < 2000 && t.state() != State::Running; ++i) tickP(t, &st);
+  ASSERT_EQ(t.state(), State::Running);
+  const double q0 = tickP(t, &st).plan_time;
+  EXPECT_NEAR(tickP(t, nullptr).plan_time, q0 + 0.005, 1e-12);
+}
+
 TEST_F(RuntimeTest, MoveToStartKeepsTheFeetAndTheLimits) {
   // The robot stands on the plan's start placements but in half-sitting (the plan leans its
   // legs) with its arms 0.05 rad away: the move must be smooth, within the velocity limits, and

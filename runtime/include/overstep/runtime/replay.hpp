@@ -49,6 +49,10 @@ struct ReplayOptions {
   int watchdog_periods = 3;    ///< periods without a state before Hold
   double joint_limit_margin = 0.02;   ///< rad beyond the mechanical limit that counts as a fault
   double stabilizer_ramp_lead = 0.0;  ///< s of the plan's start held while the stabilizer ramps in
+  /// The plan advances with the robot's clock (the states' time stamps: the lcm and lockstep
+  /// clocks) instead of one period per tick: a tick without a state (the watchdog's) holds the
+  /// plan's time, and a state that comes late or after a lost one catches it up.
+  bool robot_clock = false;
 };
 
 /// What one tick produced (preallocated; the loop publishes it).
@@ -106,6 +110,7 @@ class Replay {
   stabilizer::Stabilizer stab_;
   TickOutput out_;
   core::RobotState last_state_;
+  std::int64_t last_utime_ = 0;  ///< time stamp of the last accepted state (robot_clock)
   bool have_state_ = false;
   bool start_requested_ = false;
   int missed_ = 0;
