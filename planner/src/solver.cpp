@@ -252,7 +252,7 @@ constexpr int kPolishIterations = 400;
 RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::VectorXd& x0,
                                      int max_iterations, const std::atomic<bool>* stop,
                                      const std::function<void(const IterationInfo&)>& on_iter,
-                                     double time_limit_s, double target) {
+                                     double time_limit_s) {
   // Projected Levenberg-Marquardt on the violation residuals r = [max(0, g); h] (rows near
   // activity keep their Jacobians so the step does not break them). NLopt offers no
   // least-squares method; SLSQP started far from feasibility stalls (measured: docs/planner.md).
@@ -279,18 +279,9 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
   double lambda = 1e-3;
   Eigen::VectorXd grad;
   Eigen::MatrixXd jin, jeq;
-  double best_violation = std::numeric_limits<double>::infinity();
-  int without_progress = 0;
   for (int it = 0; it < max_iterations; ++it) {
     const double viol = NloptSolver::maxViolation(e);
-    if (viol <= target) break;
-    if (viol < 0.99 * best_violation) {
-      best_violation = viol;
-      without_progress = 0;
-    } else if (++without_progress >= kRestorationStall) {
-      out.stalled = true;
-      break;
-    }
+    if (viol <= 0.1 * kFeasibilityTolerance) break;
     if (stop && stop->load()) {
       out.interrupted = true;
       break;
@@ -385,13 +376,10 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
            (w1.evaluate_s - w0.evaluate_s) - (w1.derivatives_s - w0.derivatives_s);
     return result;
   };
-  // Restoration before a stage stops once the point is feasible (SLSQP takes over from there);
-  // the polish after an infeasible stage goes on to a tenth of the tolerance, a margin for the
-  // plan's dense check.
-  auto restore = [&](const Eigen::VectorXd& from, int iterations, double target) {
+  auto restore = [&](const Eigen::VectorXd& from, int iterations) {
     return accounted(out.split.restoration, [&] {
       return restoreFeasibility(problem, from, iterations, stop, on_restore,
-                                time_limit_s - elapsed(), target);
+                                time_limit_s - elapsed());
     });
   };
   const PlannerConfig& cfg = problem.config();
@@ -418,14 +406,14 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     stages.erase(stages.begin(), stages.end() - 1);
     problem.setDifficulty(stages.front().first, stages.front().second);
     if (on_stage) on_stage("warm start: restoring feasibility, then only the target stage");
-    const RestorationResult rest = restore(x, 60, kFeasibilityTolerance);
+    const RestorationResult rest = restore(x, 60);
     x = rest.x;
     out.iterations += rest.iterations;
   } else {
     problem.setDifficulty(stages.front().first, stages.front().second);
     x = problem.initialGuess();
     if (on_stage) on_stage("restoring feasibility of the kinematic guess (Levenberg-Marquardt)");
-    const RestorationResult rest = restore(x, 60, kFeasibilityTolerance);
+    const RestorationResult rest = restore(x, 60);
     x = rest.x;
     out.iterations += rest.iterations;
   }
@@ -445,7 +433,7 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     if (i > 0 && warm_start == nullptr) {
       // A harder stage starts infeasible (e.g. violations ~2 when the CoP box halves); SLSQP's
       // identity-Hessian steps from there wander (measured). Project back first.
-      const RestorationResult proj = restore(x, 40, kFeasibilityTolerance);
+      const RestorationResult proj = restore(x, 40);
       out.iterations += proj.iterations;
       x = proj.x;
     }
@@ -467,7 +455,7 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
       // (they end at a tenth of the tolerance or when no step reduces the violations; on the
       // 20 cm run 30 steps ended at 0.013 and 150 at 0.0137, still descending; measured,
       // docs/planner.md).
-      const RestorationResult polish = restore(x, kPolishIterations, 0.1 * kFeasibilityTolerance);
+      const RestorationResult polish = restore(x, kPolishIterations);
       out.iterations += polish.iterations;
       x = polish.x;
       problem.evaluate(x, out.final.evaluation);

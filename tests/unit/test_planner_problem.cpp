@@ -83,21 +83,6 @@ TEST_F(Problem, RestorationStopsAtItsTimeLimit) {
   EXPECT_LT(some.max_violation, v0);
 }
 
-// The restoration stops at its target: at once when the start already meets it, and at the
-// first point that does when it must take steps (before a stage it stops once feasible).
-TEST_F(Problem, RestorationStopsAtItsTarget) {
-  OverstepProblem& raw = *raw_;
-  const double v0 = restoreFeasibility(raw, *x_, 0, nullptr, nullptr).max_violation;
-  const double inf = std::numeric_limits<double>::infinity();
-  const RestorationResult met = restoreFeasibility(raw, *x_, 40, nullptr, nullptr, inf, 2.0 * v0);
-  EXPECT_EQ(met.iterations, 0);
-  EXPECT_FALSE(met.stalled);
-  const RestorationResult half = restoreFeasibility(raw, *x_, 40, nullptr, nullptr, inf, 0.5 * v0);
-  EXPECT_LE(half.max_violation, 0.5 * v0);
-  EXPECT_GE(half.iterations, 1);
-  EXPECT_LT(half.iterations, 40);
-}
-
 TEST_F(Problem, LayoutAndRowFamiliesAreConsistent) {
   const auto& lay = problem_->layout();
   EXPECT_EQ(lay.total, 5 + 6 + 16 * lay.free_cp);

@@ -78,21 +78,15 @@ struct RestorationResult {
   double max_violation = 0.0;
   bool interrupted = false;
   bool timed_out = false;  ///< stopped by its time limit
-  bool stalled = false;    ///< stopped because the violation no longer fell
 };
 
-/// Restoration steps without a point 1 % nearer to feasibility that end a restoration.
-inline constexpr int kRestorationStall = 10;
-
-/// Drives x toward feasibility (least squares on the violations, bounds respected). Stops once
-/// the largest violation is at most `target`, after `max_iterations` steps, after
-/// kRestorationStall steps without progress, on `stop`, or once `time_limit_s` of wall time has
-/// passed (checked before each step; <= 0: no step at all).
+/// Drives x toward feasibility (least squares on the violations, bounds respected). Stops after
+/// `max_iterations` steps, on `stop`, or once `time_limit_s` of wall time has passed (checked
+/// before each step; <= 0: no step at all).
 RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::VectorXd& x0,
                                      int max_iterations, const std::atomic<bool>* stop,
                                      const std::function<void(const IterationInfo&)>& on_iter,
-                                     double time_limit_s = std::numeric_limits<double>::infinity(),
-                                     double target = 0.1 * kFeasibilityTolerance);
+                                     double time_limit_s = std::numeric_limits<double>::infinity());
 
 /// Runs the homotopy from the kinematic guess (after a feasibility restoration) to the target
 /// obstacle and CoP box; with `warm_start` (a solution vector of this problem's layout, e.g. a
