@@ -83,21 +83,17 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
       for (int f = 0; f < 2; ++f) {
         Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
         target.translation() << feet2[f].x(), feet2[f].y(), lift[f];
-        int cols[6];
-        for (int j = 0; j < 6; ++j) cols[j] = m.leg_coord[static_cast<std::size_t>(6 * f + j)];
-        // Damped Newton inside the safe limits, from the previous solution and, if that stalls,
-        // again from half-sitting; the better result is kept.
-        auto solve = [&](Eigen::VectorXd& qs) {
-          return m.solveLegIk(model, f, target, qs, 1e-6, 60, 1e-10, true);
-        };
-        Eigen::VectorXd qa = q;
-        const double ea = solve(qa);
-        if (ea > 1e-6) {
-          Eigen::VectorXd qb = q;
-          for (int j = 0; j < 6; ++j) qb(cols[j]) = m.q_rest(cols[j]);
-          if (solve(qb) < ea) qa = qb;
+        // Closed form, the previous solution choosing the branch, kept inside the safe range.
+        const auto& d = model.description();
+        robots::Vector6d prev;
+        for (int j = 0; j < 6; ++j) prev(j) = q(m.leg_coord[static_cast<std::size_t>(6 * f + j)]);
+        const robots::LegIkResult ik = m.legToSole(model, f, target, q, prev);
+        for (int j = 0; j < 6; ++j) {
+          const auto& aj =
+              d.actuated[static_cast<std::size_t>(m.leg_act[static_cast<std::size_t>(6 * f + j)])];
+          q(m.leg_coord[static_cast<std::size_t>(6 * f + j)]) =
+              std::clamp(ik.q(j), aj.safeLower(), aj.safeUpper());
         }
-        for (int j = 0; j < 6; ++j) q(cols[j]) = qa(cols[j]);
       }
     };
     for (int iter = 0; iter < 6; ++iter) {

@@ -161,9 +161,8 @@ void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at
             (changed[i].eq - m.base_samples[static_cast<std::size_t>(k)].eq) / hj;
       }
       grad(j) = (m.objective(w, ptr, nullptr) - at.objective) / hj;
-      static const int boundary[4] = {1, 2, 3, 4};
       for (int e = 0; e < Impl::kEvents; ++e) {
-        const double te = w.timing->start(boundary[e]);
+        const double te = w.timing->start(Impl::eventBoundary(e));
         if (te < t_lo - 1e-12 || te > t_hi + 1e-12) continue;
         m.eventRows(w, e, tmp_event);
         jeq.col(j).segment(m.event_eq_off[e], m.event_eq_cnt[e]) =

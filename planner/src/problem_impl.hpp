@@ -1,146 +1,14 @@
 #pragma once
 // Internal to the planner library: the problem's private state, shared by problem.cpp, guess.cpp
 // and to_plan.cpp. Not installed, not included by users.
-#include "overstep/planner/problem.hpp"
-
-#include <Eigen/Cholesky>
-#include <Eigen/LU>
-#include <Eigen/QR>
-#include <Eigen/SVD>
-#include <algorithm>
-#include <atomic>
-#include <cmath>
-#include <cstdio>
-#include <cstdlib>
-#include <limits>
-#include <nlohmann/json.hpp>
-#include <thread>
-
-#include "overstep/core/error.hpp"
-#include "overstep/core/rotation.hpp"
-#include "overstep/core/wrench.hpp"
-#include "overstep/planner/spline.hpp"
-#include "overstep/robots/collision.hpp"
-#include "overstep/robots/leg.hpp"
+#include "constraints/row_term.hpp"
+#include "problem_model.hpp"
 
 namespace overstep::planner {
-namespace detail {
-
-inline constexpr int kRight = 0;
-inline constexpr int kLeft = 1;
-inline constexpr double kCopScale = 0.005;       // m, fixed scale of CoP rows
-inline constexpr double kDistScale = 0.05;       // m, scale of clearance/distance rows
-inline constexpr double kJointScale = 0.1;       // rad
-inline constexpr double kFlexTorqueScale = 5.0;  // N m
-inline constexpr double kKsSharpness = 40.0;
-// Lift-off rows: scale of the lifting foot's normal-force row, a fraction of the weight.
-inline constexpr double kLiftOffNormal = 0.03;
-// Double-support wrench split (distributeWrench).
-inline constexpr double kLoadFloor = 0.02;        // softness of the load share at zero force
-inline constexpr double kLiftWeightFloor = 1e-3;  // lifting foot's share factor at lift-off
-
-/// Smooth maximum of values (KS), used to aggregate limit ratios into one row.
-inline double smoothMax(const Eigen::VectorXd& v, double rho) {
-  const double m = v.maxCoeff();
-  return m + std::log((rho * (v.array() - m)).exp().sum()) / rho;
-}
-
-using core::pitchOf;
-using core::rollOf;
-inline double yawOf(const Eigen::Matrix3d& R) { return std::atan2(R(1, 0), R(0, 0)); }
-
-inline Eigen::Isometry3d placement(double x, double y) {
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  X.translation() << x, y, 0.0;
-  return X;
-}
-
-/// 6-D pose error of X relative to target, world-aligned [angular; linear].
-inline core::Vector6d poseError(const Eigen::Isometry3d& target, const Eigen::Isometry3d& X) {
-  core::Vector6d e;
-  const Eigen::AngleAxisd aa(target.linear() * X.linear().transpose());
-  e.head<3>() = aa.axis() * aa.angle();
-  e.tail<3>() = target.translation() - X.translation();
-  return e;
-}
-
-struct CapsuleRef {
-  int frame = -1;
-  Eigen::Vector3d p0, p1;
-  double radius = 0.0;
-  std::string link;
-};
-
-/// What one sample contributes.
-struct SampleOut {
-  Eigen::VectorXd ineq;
-  Eigen::VectorXd eq;
-  std::array<double, kObjectiveTerms> terms{};  // unweighted, normalised, per unit time
-  Eigen::VectorXd tau;                          // actuated torques (for the torque-rate term)
-  double t = 0.0;
-};
-
-/// The full state of the robot at one instant, and the contact wrenches.
-struct State {
-  Eigen::VectorXd q, v, a, tau;  // tau: inverse dynamics without contacts (all coordinates)
-  Eigen::VectorXd tau_act;       // actuator torques of the robot in contact (seed eq. 1)
-  core::Vector6d wrench[2];      // [torque; force] about each sole origin, world frame
-  bool contact[2] = {false, false};
-  Eigen::Isometry3d sole[2];
-  core::Vector6d W_O;  // total contact wrench about the world origin
-  double ik_error = 0.0;
-  double reach = 0.0;        // hip-ankle distance of the IK leg
-  double ds_balance = 0.0;   // DS: unreachable ankle-moment balance about the feet's line, N m
-  int lifting = -1;          // DS before a lift-off: the lifting foot
-  double lift_weight = 1.0;  // and its share factor (1 - s) + eps
-  double ik_seed_gap = 0.0;  // DS: |IK leg - its spline|^2, rad^2
-};
-
-}  // namespace detail
 
 using namespace detail;  // NOLINT: internal header
 
-struct OverstepProblem::Impl {
-  robots::WholeBodyModel model_template;
-  PlannerConfig cfg;
-  core::ObstacleSpec obstacle;
-  double height = 0.2;
-  double cop_box = 0.01;
-  /// The homotopy's last stage (the target CoP box): the lift-off rows at the check's scale and
-  /// the pelvis at pelvis_margin.
-  bool finalBox() const { return std::abs(cop_box - cfg.cop_box) < 1e-12; }
-  VariableLayout lay;
-  int n_ctrl = 0;  // control points per curve
-  double mass = 0.0, mg = 0.0, toes_x = 0.13;
-  std::array<int, 12> leg_coord{};  // model coordinates of RLEG_JOINT0-5, LLEG_JOINT0-5
-  std::array<int, 12> leg_act{};    // actuated indices
-  std::array<int, 4> flex_coord{};  // RLEG roll, pitch, LLEG roll, pitch
-  int sole_frame[2]{};
-  int hip_frame[2]{};                       // hip pitch link origin per leg (reach)
-  int ankle_frame[2]{};                     // ankle pitch link origin per leg (reach)
-  std::array<std::string, 3> leg_links[2];  // thigh, shank and foot bodies per leg
-  int head_frame = -1;
-  int base_frame = -1;
-  core::FootDescription foot[2];
-  std::vector<CapsuleRef> caps;
-  std::vector<int> leg_caps[2];  // capsules of each leg (indices into caps)
-  std::vector<std::pair<int, int>> self_pairs;
-  robots::ObstacleGeometry obstacle_geom;
-  Eigen::VectorXd q_rest;  // half-sitting (upper body posture held)
-
-  std::vector<GridPoint> grid;  // (phase, s); t filled per evaluation
-  std::vector<int> ineq_off, ineq_cnt, eq_off, eq_cnt;
-  std::vector<Family> ineq_fam, eq_fam;
-  int n_ineq = 0, n_eq = 0;
-  static constexpr int kEvents = 4;
-  static constexpr int kLiftOffRows = 3;  // the lifting foot's normal force and tipping moments
-  int event_eq_off[kEvents]{};
-  int event_eq_cnt[kEvents]{};
-  // Per phase, the foot whose placement fixes the floating base (phaseTable()). At a switch the
-  // leg changing representation (double-support inverse
-  // kinematics <-> spline) is that double-support phase's other leg.
-  int anchor_of[kPhaseCount]{};
-
+struct OverstepProblem::Impl : ProblemModel {
   struct Workspace {
     std::unique_ptr<robots::WholeBodyModel> model;
     std::unique_ptr<PhaseSpline> spline;
@@ -148,8 +16,11 @@ struct OverstepProblem::Impl {
     Eigen::Vector2d feet[3];         // right start, right landing, left landing
     std::unique_ptr<PhaseTiming> timing;
     State st;
+    SampleData sample;  // what the sample terms read (capsules reused between samples)
   };
   std::vector<Workspace> ws;
+  std::vector<std::unique_ptr<SampleTerm>> sample_terms;  // stacking order: constraints/terms.cpp
+  std::vector<std::unique_ptr<EventTerm>> event_terms;
   std::atomic<int> evaluations{0};
   WorkAccount work;
 
@@ -159,7 +30,7 @@ struct OverstepProblem::Impl {
   Eigen::VectorXd base_x;
 
   Impl(const robots::WholeBodyModel& m, PlannerConfig c, core::ObstacleSpec o)
-      : model_template(m), cfg(std::move(c)), obstacle(o) {}
+      : ProblemModel(m, std::move(c), o) {}
 
   // -------------------------------------------------------------- set-up
   void setUp() {
@@ -188,6 +59,8 @@ struct OverstepProblem::Impl {
       hip_frame[f] = model_template.frameIndex(c.links[2]);
       ankle_frame[f] = model_template.frameIndex(c.links[4]);
       leg_links[f] = {c.links[2], c.links[3], c.foot_link};  // thigh, shank, foot
+      ankle_link_frame[f] = c.ankle_frame;
+      leg_ik[f] = std::make_unique<robots::LegIk>(model_template, c);
     }
     foot[kRight] = *d.foot("right");
     foot[kLeft] = *d.foot("left");
@@ -251,31 +124,16 @@ struct OverstepProblem::Impl {
       for (int k = 0; k <= (closed ? nph : nph - 1); ++k)
         grid.push_back({i, static_cast<double>(k) / nph, 0.0});
     }
+    // The row layout, from the terms (constraints/terms.cpp gives the stacking order).
+    sample_terms = sampleTerms();
+    event_terms = eventTerms();
     for (const auto& g : grid) {
-      const auto& ph = phaseTable()[static_cast<std::size_t>(g.phase)];
-      const bool ds = ph.right_contact && ph.left_contact;
       ineq_off.push_back(n_ineq);
       eq_off.push_back(n_eq);
-      const int contacts = ds ? 2 : 1;
-      for (int c = 0; c < contacts; ++c) {
-        for (int r = 0; r < 4; ++r) ineq_fam.push_back(Family::CoP);
-        for (int r = 0; r < 6; ++r) ineq_fam.push_back(Family::Friction);
-        ineq_fam.push_back(Family::Unilateral);
+      for (const auto& term : sample_terms) {
+        auto& fam = term->equality() ? eq_fam : ineq_fam;
+        fam.insert(fam.end(), static_cast<std::size_t>(term->rows(*this, g)), term->family());
       }
-      if (!ds)
-        for (int r = 0; r < 4; ++r) ineq_fam.push_back(Family::Clearance);
-      ineq_fam.push_back(Family::ObstacleCollision);
-      ineq_fam.push_back(Family::SelfCollision);
-      for (int r = 0; r < 4; ++r) ineq_fam.push_back(Family::Pelvis);
-      ineq_fam.push_back(Family::Velocity);
-      ineq_fam.push_back(Family::Torque);
-      if (ds) {
-        for (int r = 0; r < 12; ++r) ineq_fam.push_back(Family::JointLimits);
-        ineq_fam.push_back(Family::Reach);
-        for (int r = 0; r < 2; ++r) ineq_fam.push_back(Family::Dynamics);  // sway balance band
-      }
-      const int dyn_eq = ds ? 0 : 4;
-      for (int r = 0; r < dyn_eq; ++r) eq_fam.push_back(Family::Dynamics);
       ineq_cnt.push_back(static_cast<int>(ineq_fam.size()) - n_ineq);
       eq_cnt.push_back(static_cast<int>(eq_fam.size()) - n_eq);
       n_ineq = static_cast<int>(ineq_fam.size());
@@ -288,10 +146,8 @@ struct OverstepProblem::Impl {
     // goes from spline to inverse kinematics, and back at its lift-off.
     for (int e = 0; e < kEvents; ++e) {
       event_eq_off[e] = n_eq;
-      for (int r = 0; r < 12; ++r) eq_fam.push_back(Family::Switching);
-      if (e == 0 || e == 2)
-        for (int r = 0; r < kLiftOffRows; ++r) eq_fam.push_back(Family::LiftOff);
-
+      for (const auto& term : event_terms)
+        eq_fam.insert(eq_fam.end(), static_cast<std::size_t>(term->rows(*this, e)), term->family());
       event_eq_cnt[e] = static_cast<int>(eq_fam.size()) - n_eq;
       n_eq = static_cast<int>(eq_fam.size());
     }
@@ -400,37 +256,18 @@ struct OverstepProblem::Impl {
                      .segment(6, model_template.actuatedCount());
   }
 
-  /// Damped-Newton inverse kinematics of one leg (6 joints, base fixed) putting its sole frame
-  /// at `target`; each joint is clamped to [lower, upper] of `safe` ? the planner's safe range :
-  /// the mechanical range. Stops below `tol` or after `iterations`; returns the final pose error.
-  /// Damping keeps steps finite at the reach limit.
-  double solveLegIk(robots::WholeBodyModel& m, int leg, const Eigen::Isometry3d& target,
-                    Eigen::VectorXd& q, double damping, int iterations, double tol,
-                    bool safe) const {
-    const int f = sole_frame[leg];
-    const auto& joints = model_template.description().actuated;
-    double err = 0.0;
-    Eigen::Matrix<double, 6, 6> J;
-    for (int it = 0; it < iterations; ++it) {
-      m.setPositions(q);
-      const core::Vector6d e = poseError(target, m.framePose(f));
-      err = e.norm();
-      if (err < tol) break;
-      const Eigen::MatrixXd Jf = m.frameJacobian(f);
-      for (int j = 0; j < 6; ++j)
-        J.col(j) = Jf.col(leg_coord[static_cast<std::size_t>(6 * leg + j)]);
-      const Eigen::Matrix<double, 6, 6> A =
-          J.transpose() * J + damping * Eigen::Matrix<double, 6, 6>::Identity();
-      const Eigen::Matrix<double, 6, 1> dq = A.ldlt().solve(J.transpose() * e);
-      for (int j = 0; j < 6; ++j) {
-        const int c = leg_coord[static_cast<std::size_t>(6 * leg + j)];
-        const auto& aj =
-            joints[static_cast<std::size_t>(leg_act[static_cast<std::size_t>(6 * leg + j)])];
-        q(c) = std::clamp(q(c) + dq(j), safe ? aj.safeLower() : aj.lower,
-                          safe ? aj.safeUpper() : aj.upper);
-      }
-    }
-    return err;
+  /// Closed-form inverse kinematics of leg `leg` (robots::LegIk) putting its sole frame at X_WS,
+  /// with the base and the ankle bushing as they are in q; `reference` (chain order) picks the
+  /// ankle-roll branch. Exact wherever the target is within reach; the angles are not clamped
+  /// (the joint-limit rows see them).
+  robots::LegIkResult legToSole(robots::WholeBodyModel& m, int leg, const Eigen::Isometry3d& X_WS,
+                                const Eigen::VectorXd& q, const robots::Vector6d& reference) const {
+    m.setPositions(q);
+    const Eigen::Isometry3d X_WB = m.framePose(base_frame);
+    // Ankle link to sole: the bushing's deflection and the foot's geometry (no leg joint in it).
+    const Eigen::Isometry3d X_AS =
+        m.framePose(ankle_link_frame[leg]).inverse() * m.framePose(sole_frame[leg]);
+    return leg_ik[leg]->solve(X_WB.inverse() * X_WS * X_AS.inverse(), &reference);
   }
 
   void solveOtherLeg(Workspace& w, int leg, const Eigen::Isometry3d& target) const {
@@ -440,20 +277,13 @@ struct OverstepProblem::Impl {
     int cols[6];
     for (int j = 0; j < 6; ++j) cols[j] = leg_coord[static_cast<std::size_t>(6 * leg + j)];
     Eigen::Matrix<double, 6, 6> J;
-    // From the leg's spline (a seed the optimizer moves freely), and if that does not converge
-    // (a seed far off can lead damped Newton astray: measured, a foot 0.6 m up on a restored
-    // point), again from half-sitting; the better result is kept.
-    st.ik_error = solveLegIk(m, leg, target, st.q, 1e-8, 30, 1e-11, false);
-    if (st.ik_error > 1e-9) {
-      Eigen::VectorXd q_seed = st.q;  // the leg IK changes only the leg's joints
-      for (int j = 0; j < 6; ++j) q_seed(cols[j]) = q_rest(cols[j]);
-      const double e2 = solveLegIk(m, leg, target, q_seed, 1e-8, 60, 1e-11, false);
-      if (e2 < st.ik_error) {
-        st.q = q_seed;
-        st.ik_error = e2;
-      }
-    }
+    // The leg's spline values choose the ankle-roll branch (they coincide for stepping postures).
+    robots::Vector6d seed;
+    for (int j = 0; j < 6; ++j) seed(j) = st.q(cols[j]);
+    const robots::LegIkResult ik = legToSole(m, leg, target, st.q, seed);
+    for (int j = 0; j < 6; ++j) st.q(cols[j]) = ik.q(j);
     m.setPositions(st.q);
+    st.ik_error = poseError(target, m.framePose(f)).norm();
     const Eigen::MatrixXd Jf = m.frameJacobian(f);
     for (int j = 0; j < 6; ++j) J.col(j) = Jf.col(cols[j]);
     // The leg is singular only when stretched beyond reach (a point the reach row rejects, met
@@ -724,9 +554,6 @@ struct OverstepProblem::Impl {
     return (1.0 - s) + kLiftWeightFloor;
   }
 
-  /// The foot that lifts at the end of double-support `phase` (-1: none).
-  static int liftingFoot(int phase) { return phase == 0 ? kRight : phase == 2 ? kLeft : -1; }
-
   /// One weighted pass of distributeWrench: the wrenches z = [m_R f_R m_L f_L] minimising
   /// sum_f |w_f|^2 / rho_f (moments weighted as forces at a 0.1 m lever) subject to the sum and
   /// the three reachable elastic-ankle balances; sets the state's sway-balance residual (the
@@ -824,11 +651,28 @@ struct OverstepProblem::Impl {
   }
 
   // -------------------------------------------------------------- rows of one sample
-  /// The swing sole corners' minimal height: swing_clearance sin(pi s), whose slope at the
-  /// contact switches keeps the last samples before a touchdown a few millimetres up (at
-  /// sin^2 the sample 8 % of the swing before touchdown asked for 1.3 mm, and a corner dipped
-  /// 1.8 mm below the ground between it and the touchdown; measured, docs/planner.md).
-  double minHeight(double s) const { return cfg.swing_clearance * std::sin(M_PI * s); }
+
+  /// The capsules in the world at the current state, and how far each can travel before the
+  /// nearer sample (swept clearance; 0 when off).
+  void worldCapsules(Workspace& w, int phase, SampleData& sd) const {
+    const robots::WholeBodyModel& m = *w.model;
+    sd.capsules.resize(caps.size());
+    sd.sweep.assign(caps.size(), 0.0);
+    const double half_h =
+        0.5 * w.timing->durations()(phase) / cfg.samples_per_phase[static_cast<std::size_t>(phase)];
+    for (std::size_t i = 0; i < caps.size(); ++i) {
+      const Eigen::Isometry3d X = m.framePose(caps[i].frame);
+      robots::Capsule& c = sd.capsules[i];
+      c = {X * caps[i].p0, X * caps[i].p1, caps[i].radius};
+      if (cfg.swept_clearance > 0.0) {
+        const core::Vector6d V = m.frameVelocity(caps[i].frame);
+        const Eigen::Vector3d w0 = V.head<3>(), v0 = V.tail<3>();
+        const double s0 = (v0 + w0.cross(c.p0 - X.translation())).norm();
+        const double s1 = (v0 + w0.cross(c.p1 - X.translation())).norm();
+        sd.sweep[i] = cfg.swept_clearance * half_h * std::max(s0, s1);
+      }
+    }
+  }
 
   void sampleRows(Workspace& w, int k, SampleOut& out) const {
     const GridPoint& g = grid[static_cast<std::size_t>(k)];
@@ -840,137 +684,22 @@ struct OverstepProblem::Impl {
     out.t = t;
     out.ineq.resize(ineq_cnt[static_cast<std::size_t>(k)]);
     out.eq.resize(eq_cnt[static_cast<std::size_t>(k)]);
-    int r = 0;
-    const double h = 0.5 * cop_box * cfg.limit_margin;
-    const double mu = cfg.friction / std::sqrt(2.0) * cfg.limit_margin;
-    const double tors = cfg.torsion * cfg.limit_margin;
-    const bool ds = st.contact[kRight] && st.contact[kLeft];
-    for (int f = 0; f < 2; ++f) {
-      if (!st.contact[f]) continue;
-      const Eigen::Matrix3d Rt = st.sole[f].linear().transpose();
-      const Eigen::Vector3d mo = Rt * st.wrench[f].head<3>();
-      const Eigen::Vector3d fo = Rt * st.wrench[f].tail<3>();
-      const double s_cop = 1.0 / (mg * kCopScale);
-      out.ineq(r++) = (-mo.y() - h * fo.z()) * s_cop;  // cop_x <= h
-      out.ineq(r++) = (mo.y() - h * fo.z()) * s_cop;   // cop_x >= -h
-      out.ineq(r++) = (mo.x() - h * fo.z()) * s_cop;   // cop_y <= h
-      out.ineq(r++) = (-mo.x() - h * fo.z()) * s_cop;  // cop_y >= -h
-      out.ineq(r++) = (fo.x() - mu * fo.z()) / mg;
-      out.ineq(r++) = (-fo.x() - mu * fo.z()) / mg;
-      out.ineq(r++) = (fo.y() - mu * fo.z()) / mg;
-      out.ineq(r++) = (-fo.y() - mu * fo.z()) / mg;
-      out.ineq(r++) = (mo.z() - tors * fo.z()) / (mg * cfg.torsion);
-      out.ineq(r++) = (-mo.z() - tors * fo.z()) / (mg * cfg.torsion);
-      // Unilateral with a minimal normal force; an unloading foot may reach zero at lift-off.
-      double fmin = cfg.min_normal_force;
-      if (f == liftingFoot(g.phase)) fmin *= (1.0 - g.s);
-      out.ineq(r++) = (fmin - fo.z()) / mg;
-    }
-    if (!ds) {
-      const int sw = st.contact[kRight] ? kLeft : kRight;
-      const auto& sole = foot[sw].sole;
-      // At touchdown (s = 1) the switching rows pin the sole to the ground: corner rows there
-      // would duplicate them (degenerate constraints stall SLSQP), so they are kept inactive.
-      const double hmin = g.s == 1.0 ? -kDistScale : minHeight(g.s);
-      const double xs[2] = {sole.x_front, -sole.x_back};
-      const double ys[2] = {foot[sw].yMin(), foot[sw].yMax()};
-      for (double cx : xs)
-        for (double cy : ys) {
-          const Eigen::Vector3d c = st.sole[sw] * Eigen::Vector3d(cx, cy, 0.0);
-          out.ineq(r++) = (hmin - c.z()) / kDistScale;
-        }
-    }
-    // Capsules in the world, and how far each can travel before the nearer sample (swept
-    // clearance; 0 when off).
-    std::vector<robots::Capsule> wc(caps.size());
-    std::vector<double> sweep(caps.size(), 0.0);
-    const double half_h = 0.5 * w.timing->durations()(g.phase) /
-                          cfg.samples_per_phase[static_cast<std::size_t>(g.phase)];
-    for (std::size_t i = 0; i < caps.size(); ++i) {
-      const Eigen::Isometry3d X = m.framePose(caps[i].frame);
-      wc[i] = {X * caps[i].p0, X * caps[i].p1, caps[i].radius};
-      if (cfg.swept_clearance > 0.0) {
-        const core::Vector6d V = m.frameVelocity(caps[i].frame);
-        const Eigen::Vector3d w0 = V.head<3>(), v0 = V.tail<3>();
-        const double s0 = (v0 + w0.cross(wc[i].p0 - X.translation())).norm();
-        const double s1 = (v0 + w0.cross(wc[i].p1 - X.translation())).norm();
-        sweep[i] = cfg.swept_clearance * half_h * std::max(s0, s1);
-      }
-    }
-    {
-      Eigen::VectorXd dist(static_cast<Eigen::Index>(leg_caps[0].size() + leg_caps[1].size()));
-      Eigen::Index i = 0;
-      core::ObstacleSpec spec = obstacle;
-      spec.height = height;
-      const robots::ObstacleGeometry og = robots::ObstacleGeometry::fromSpec(spec, toes_x);
-      for (int f = 0; f < 2; ++f)
-        for (int c : leg_caps[f])
-          dist(i++) = robots::obstacleDistance(wc[static_cast<std::size_t>(c)], og) -
-                      sweep[static_cast<std::size_t>(c)];
-      out.ineq(r++) =
-          (cfg.obstacle_clearance - robots::smoothMin(dist, cfg.smooth_min_rho)) / kDistScale;
-    }
-    {
-      Eigen::VectorXd dist(static_cast<Eigen::Index>(self_pairs.size()));
-      for (std::size_t i = 0; i < self_pairs.size(); ++i)
-        dist(static_cast<Eigen::Index>(i)) =
-            robots::capsuleDistance(wc[static_cast<std::size_t>(self_pairs[i].first)],
-                                    wc[static_cast<std::size_t>(self_pairs[i].second)]) -
-            sweep[static_cast<std::size_t>(self_pairs[i].first)] -
-            sweep[static_cast<std::size_t>(self_pairs[i].second)];
-      out.ineq(r++) =
-          (cfg.self_clearance - robots::smoothMin(dist, cfg.smooth_min_rho)) / kDistScale;
-    }
-    const Eigen::Matrix3d Rb = m.framePose(base_frame).linear();
-    const double roll = rollOf(Rb), pitch = pitchOf(Rb),
-                 eps = cfg.pelvis_tilt * (finalBox() ? cfg.pelvis_margin : cfg.limit_margin);
-    out.ineq(r++) = (roll - eps) / eps;
-    out.ineq(r++) = (-roll - eps) / eps;
-    out.ineq(r++) = (pitch - eps) / eps;
-    out.ineq(r++) = (-pitch - eps) / eps;
-    {
-      Eigen::VectorXd ratio(24);
-      for (int j = 0; j < 12; ++j) {
-        const auto& aj = d.actuated[static_cast<std::size_t>(leg_act[static_cast<std::size_t>(j)])];
-        const double qd = st.v(leg_coord[static_cast<std::size_t>(j)]);
-        ratio(2 * j) = qd / aj.velocity;
-        ratio(2 * j + 1) = -qd / aj.velocity;
-      }
-      out.ineq(r++) = smoothMax(ratio, kKsSharpness) - cfg.velocity_margin;
-    }
-    {
-      const int na = model_template.actuatedCount();
-      Eigen::VectorXd ratio(2 * na);
-      for (int j = 0; j < na; ++j) {
-        const double tq = st.tau_act(j);
-        ratio(2 * j) = tq / d.actuated[static_cast<std::size_t>(j)].torque;
-        ratio(2 * j + 1) = -ratio(2 * j);
-      }
-      out.ineq(r++) = smoothMax(ratio, kKsSharpness) - 1.0;
-    }
-    int e = 0;
-    if (ds) {
-      const int leg = 1 - anchor_of[g.phase];
-      for (int j = 0; j < 6; ++j) {
-        const int a = leg_act[static_cast<std::size_t>(6 * leg + j)];
-        const auto& aj = d.actuated[static_cast<std::size_t>(a)];
-        const double qj = st.q(model_template.actuatedCoordinate(a));
-        out.ineq(r++) = (qj - aj.safeUpper()) / kJointScale;
-        out.ineq(r++) = (aj.safeLower() - qj) / kJointScale;
-      }
-      out.ineq(r++) = (st.reach - cfg.leg_reach) / kDistScale;
-      out.ineq(r++) = (st.ds_balance - cfg.ds_balance_band) / kFlexTorqueScale;
-      out.ineq(r++) = (-st.ds_balance - cfg.ds_balance_band) / kFlexTorqueScale;
-    } else {
-      const int stance = st.contact[kRight] ? kRight : kLeft;
-      const Eigen::MatrixXd J = m.frameJacobian(sole_frame[stance]);
-      for (int f = 0; f < 2; ++f) {
-        for (int k2 = 0; k2 < 2; ++k2) {
-          const int c = flex_coord[static_cast<std::size_t>(2 * f + k2)];
-          double res = st.tau(c);
-          if (f == stance) res -= J.col(c).dot(st.wrench[f]);
-          out.eq(e++) = res / kFlexTorqueScale;
-        }
+    SampleData& sd = w.sample;
+    sd.g = &g;
+    sd.t = t;
+    sd.model = &m;
+    sd.st = &st;
+    worldCapsules(w, g.phase, sd);
+    int ri = 0, re = 0;
+    for (const auto& term : sample_terms) {
+      const int n = term->rows(*this, g);
+      if (n == 0) continue;
+      if (term->equality()) {
+        term->evaluate(*this, sd, out.eq.data() + re);
+        re += n;
+      } else {
+        term->evaluate(*this, sd, out.ineq.data() + ri);
+        ri += n;
       }
     }
     // Objective terms (per unit time, normalised).
@@ -1009,48 +738,21 @@ struct OverstepProblem::Impl {
   /// Switching rows at event e (instants t1..t4): the spline of the leg that changes
   /// representation matches the double-support IK in position and velocity; lift-off forces.
   void eventRows(Workspace& w, int e, Eigen::VectorXd& out) const {
-    // e: 0 -> t1 (end of phase 0), 1 -> t2 (start of phase 2), 2 -> t3 (end of phase 2),
-    //    3 -> t4 (start of phase 4). The DS phase whose IK is matched, and the leg.
-    static const int ds_phase[4] = {0, 2, 2, 4};
-    static const int boundary[4] = {1, 2, 3, 4};
-    const double t = w.timing->start(boundary[e]);
-    buildState(w, ds_phase[e], t);
-    const State& st = w.st;
+    const double t = w.timing->start(eventBoundary(e));
+    buildState(w, eventPhase(e), t);
     const PhaseSpline::Basis b = w.spline->evaluate(t);
-    const int leg = 1 - anchor_of[ds_phase[e]];
+    EventData ed;
+    ed.event = e;
+    ed.st = &w.st;
+    ed.basis = &b;
+    ed.legs_c = &w.legs_c;
     out.resize(event_eq_cnt[e]);
     int r = 0;
-    for (int j = 0; j < 6; ++j) {
-      const int row = 6 * leg + j;
-      const double qs = w.legs_c.row(row).segment(b.first, 4).dot(b.value);
-      out(r++) = (qs - st.q(leg_coord[static_cast<std::size_t>(row)])) / kJointScale;
-    }
-    for (int j = 0; j < 6; ++j) {
-      const int row = 6 * leg + j;
-      const double vs = w.legs_c.row(row).segment(b.first, 4).dot(b.d1);
-      out(r++) = (vs - st.v(leg_coord[static_cast<std::size_t>(row)])) / 1.0;
-    }
-    if (e == 0 || e == 2) {
-      // Lift-off: the unloading foot's wrench vanishes. Rows for its normal force and its two
-      // tipping moments (the moments come from its bushing, not from the load). Its shear and
-      // twist need no rows: the split shares them in proportion to the normal loads
-      // (distributeWrench), so they vanish with the normal force by construction, and rows for
-      // them had gradients of ~1e-5 of the others (singular values of the equality Jacobian
-      // 4e-6 against 65): SLSQP's steps to meet them were ~20 scaled units long, half of them
-      // rejected (measured, docs/history/planner.md).
-      // In the last stage scaled to the check's linear CoP form at zero load (a row at the
-      // solver's tolerance 1e-2 is 0.17 N of normal force and 0.014 N m of moment); earlier
-      // stages keep the weight's scale: tight rows from the first stage on left the 15 cm stage
-      // at 0.21 (measured, docs/history/planner.md).
-      const int lifting = liftingFoot(e == 0 ? 0 : 2);
-      const Eigen::Matrix3d Rt = st.sole[lifting].linear().transpose();
-      const Eigen::Vector3d fo = Rt * st.wrench[lifting].tail<3>();
-      const Eigen::Vector3d mo = Rt * st.wrench[lifting].head<3>();
-      const double fn = finalBox() ? kLiftOffNormal * mg : mg;
-      const double ms = (finalBox() ? 0.5 : 1.0) * mg * kCopScale;
-      out(r++) = fo.z() / fn;
-      out(r++) = mo.x() / ms;
-      out(r++) = mo.y() / ms;
+    for (const auto& term : event_terms) {
+      const int n = term->rows(*this, e);
+      if (n == 0) continue;
+      term->evaluate(*this, ed, out.data() + r);
+      r += n;
     }
   }
 

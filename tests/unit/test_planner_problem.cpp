@@ -98,6 +98,46 @@ TEST_F(Problem, LayoutAndRowFamiliesAreConsistent) {
   EXPECT_TRUE(std::isfinite(e.objective));
 }
 
+// The row layout follows from the terms: count each family's rows against the phase table and
+// the sample grid (single-support phases sampled on their closed interval, double-support ones
+// one sample short of their end, the last phase closed).
+TEST_F(Problem, RowLayoutFollowsThePhasesAndSamples) {
+  const PlannerConfig cfg;
+  int contacts = 0, ss = 0, ds = 0;
+  for (int i = 0; i < kPhaseCount; ++i) {
+    const auto& ph = phaseTable()[static_cast<std::size_t>(i)];
+    const bool two = ph.right_contact && ph.left_contact;
+    const int n =
+        cfg.samples_per_phase[static_cast<std::size_t>(i)] + (!two || i + 1 == kPhaseCount ? 1 : 0);
+    contacts += n * (two ? 2 : 1);
+    (two ? ds : ss) += n;
+  }
+  auto count = [](const std::vector<Family>& fams, Family f) {
+    return static_cast<int>(std::count(fams.begin(), fams.end(), f));
+  };
+  const auto& in = problem_->inequalityFamilies();
+  const auto& eq = problem_->equalityFamilies();
+  EXPECT_EQ(count(in, Family::CoP), 4 * contacts);
+  EXPECT_EQ(count(in, Family::Friction), 6 * contacts);
+  EXPECT_EQ(count(in, Family::Unilateral), contacts);
+  EXPECT_EQ(count(in, Family::Clearance), 4 * ss);
+  EXPECT_EQ(count(in, Family::ObstacleCollision), ss + ds);
+  EXPECT_EQ(count(in, Family::SelfCollision), ss + ds);
+  EXPECT_EQ(count(in, Family::Pelvis), 4 * (ss + ds));
+  EXPECT_EQ(count(in, Family::JointLimits), 12 * ds);
+  EXPECT_EQ(count(in, Family::Reach), ds);
+  EXPECT_EQ(count(in, Family::Dynamics), 2 * ds);
+  EXPECT_EQ(count(eq, Family::Dynamics), 4 * ss);
+  EXPECT_EQ(count(eq, Family::Switching), 4 * 12);
+  EXPECT_EQ(count(eq, Family::LiftOff), 2 * 3);
+  // Each row's family is the one describeRow names.
+  for (int r = 0; r < problem_->inequalityCount(); r += 97)
+    EXPECT_EQ(
+        problem_->describeRow(*x_, false, r).rfind(familyName(in[static_cast<std::size_t>(r)]), 0),
+        0u)
+        << r;
+}
+
 TEST_F(Problem, InitialGuessIsInsideTheBounds) {
   Eigen::VectorXd lo, hi;
   problem_->bounds(lo, hi);

@@ -1,0 +1,34 @@
+// Every leg capsule at least obstacle_clearance from the obstacle (at the homotopy's current
+// height), less its swept margin: one row, the smooth minimum (KS, smooth_min_rho) of the
+// distances (FCL). Scale: kDistScale (m). One row per sample.
+#include "row_term.hpp"
+
+namespace overstep::planner::detail {
+namespace {
+
+class ObstacleClearance final : public SampleTerm {
+ public:
+  Family family() const override { return Family::ObstacleCollision; }
+  int rows(const ProblemModel&, const GridPoint&) const override { return 1; }
+  void evaluate(const ProblemModel& p, const SampleData& d, double* out) const override {
+    Eigen::VectorXd dist(static_cast<Eigen::Index>(p.leg_caps[0].size() + p.leg_caps[1].size()));
+    Eigen::Index i = 0;
+    core::ObstacleSpec spec = p.obstacle;
+    spec.height = p.height;
+    const robots::ObstacleGeometry og = robots::ObstacleGeometry::fromSpec(spec, p.toes_x);
+    for (int f = 0; f < 2; ++f)
+      for (int c : p.leg_caps[f])
+        dist(i++) = robots::obstacleDistance(d.capsules[static_cast<std::size_t>(c)], og) -
+                    d.sweep[static_cast<std::size_t>(c)];
+    out[0] =
+        (p.cfg.obstacle_clearance - robots::smoothMin(dist, p.cfg.smooth_min_rho)) / kDistScale;
+  }
+};
+
+}  // namespace
+
+std::unique_ptr<SampleTerm> makeObstacleClearance() {
+  return std::make_unique<ObstacleClearance>();
+}
+
+}  // namespace overstep::planner::detail

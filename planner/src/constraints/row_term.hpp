@@ -1,0 +1,88 @@
+#pragma once
+// Internal to the planner library. The constraint rows of the problem, one family per term
+// (the layout of TOWR's constraints/): each term says how many rows it adds at a sample (or at a
+// contact switch) and computes them from the state there. The problem stacks the terms in the
+// order of sampleTerms() / eventTerms(); the row layout (offsets, families) is derived from
+// them, never counted by hand. Rows are scaled to O(1) by a named scale with units (each term's
+// file states it); inequalities are <= 0, equalities = 0.
+//
+// Derivatives: the problem differentiates the stacked rows (OverstepProblem::derivatives).
+#include <memory>
+#include <vector>
+
+#include "../problem_model.hpp"
+
+namespace overstep::planner::detail {
+
+/// What the row terms of one sample read: the grid point, the robot state there (the model holds
+/// the same state, with its kinematics) and the capsules in the world.
+struct SampleData {
+  const GridPoint* g = nullptr;
+  double t = 0.0;                           ///< s
+  robots::WholeBodyModel* model = nullptr;  ///< at the sample's state
+  const State* st = nullptr;
+  std::vector<robots::Capsule> capsules;  ///< world frame, ProblemModel::caps order
+  /// How far each capsule can travel before the nearer sample (m; swept clearance, 0 when off).
+  std::vector<double> sweep;
+};
+
+/// A family of rows at the samples.
+class SampleTerm {
+ public:
+  virtual ~SampleTerm() = default;
+  virtual Family family() const = 0;
+  virtual bool equality() const { return false; }
+  /// Rows at grid point g (0: the term does not apply there).
+  virtual int rows(const ProblemModel& p, const GridPoint& g) const = 0;
+  /// Writes rows(p, *d.g) values to out.
+  virtual void evaluate(const ProblemModel& p, const SampleData& d, double* out) const = 0;
+};
+
+/// What the row terms of a contact switch read: the state of the double-support phase at the
+/// switch (ProblemModel::eventPhase) and the splines' basis there.
+struct EventData {
+  int event = 0;  ///< 0..3: t1 (end of phase 0), t2 (start of 2), t3 (end of 2), t4 (start of 4)
+  const State* st = nullptr;
+  const PhaseSpline::Basis* basis = nullptr;
+  const Eigen::MatrixXd* legs_c = nullptr;  ///< leg control points, 12 x C
+};
+
+/// A family of rows at the contact switches.
+class EventTerm {
+ public:
+  virtual ~EventTerm() = default;
+  virtual Family family() const = 0;
+  virtual int rows(const ProblemModel& p, int event) const = 0;
+  virtual void evaluate(const ProblemModel& p, const EventData& d, double* out) const = 0;
+};
+
+/// The sole frame's wrench of foot f: moment and force about the sole origin, sole axes.
+inline void soleWrench(const State& st, int f, Eigen::Vector3d& mo, Eigen::Vector3d& fo) {
+  const Eigen::Matrix3d Rt = st.sole[f].linear().transpose();
+  mo = Rt * st.wrench[f].head<3>();
+  fo = Rt * st.wrench[f].tail<3>();
+}
+
+// One factory per term (its file).
+std::unique_ptr<SampleTerm> makeContactCop(int foot);
+std::unique_ptr<SampleTerm> makeContactFriction(int foot);
+std::unique_ptr<SampleTerm> makeContactUnilateral(int foot);
+std::unique_ptr<SampleTerm> makeSwingClearance();
+std::unique_ptr<SampleTerm> makeObstacleClearance();
+std::unique_ptr<SampleTerm> makeSelfClearance();
+std::unique_ptr<SampleTerm> makePelvisTilt();
+std::unique_ptr<SampleTerm> makeVelocityLimit();
+std::unique_ptr<SampleTerm> makeTorqueLimit();
+std::unique_ptr<SampleTerm> makeJointLimits();
+std::unique_ptr<SampleTerm> makeLegReach();
+std::unique_ptr<SampleTerm> makeSwayBalance();
+std::unique_ptr<SampleTerm> makeElasticDynamics();
+std::unique_ptr<EventTerm> makeSwitching();
+std::unique_ptr<EventTerm> makeLiftOff();
+
+/// The sample terms in stacking order (contact rows of the right foot, then the left, then the
+/// rest), and the switch terms.
+std::vector<std::unique_ptr<SampleTerm>> sampleTerms();
+std::vector<std::unique_ptr<EventTerm>> eventTerms();
+
+}  // namespace overstep::planner::detail
