@@ -2,6 +2,7 @@
 // Internal to the planner library: the problem's private state, shared by problem.cpp, guess.cpp
 // and to_plan.cpp. Not installed, not included by users.
 #include "constraints/row_term.hpp"
+#include "costs/cost_term.hpp"
 #include "problem_model.hpp"
 
 namespace overstep::planner {
@@ -21,6 +22,8 @@ struct OverstepProblem::Impl : ProblemModel {
   std::vector<Workspace> ws;
   std::vector<std::unique_ptr<SampleTerm>> sample_terms;  // stacking order: constraints/terms.cpp
   std::vector<std::unique_ptr<EventTerm>> event_terms;
+  /// The sample costs switched on (weight != 0), with their slot in objectiveTermNames().
+  std::vector<std::pair<int, std::unique_ptr<SampleCost>>> sample_costs;
   std::atomic<int> evaluations{0};
   WorkAccount work;
 
@@ -127,6 +130,15 @@ struct OverstepProblem::Impl : ProblemModel {
     // The row layout, from the terms (constraints/terms.cpp gives the stacking order).
     sample_terms = sampleTerms();
     event_terms = eventTerms();
+    const auto& names = objectiveTermNames();
+    for (auto& cost : sampleCosts()) {
+      const auto it = std::find_if(names.begin(), names.end(),
+                                   [&](const char* n) { return std::string(n) == cost->name(); });
+      if (it == names.end())
+        throw std::logic_error(std::string("cost without weight: ") + cost->name());
+      if (cfg.weights.at(*it) != 0.0)
+        sample_costs.emplace_back(static_cast<int>(it - names.begin()), std::move(cost));
+    }
     for (const auto& g : grid) {
       ineq_off.push_back(n_ineq);
       eq_off.push_back(n_eq);
@@ -680,7 +692,6 @@ struct OverstepProblem::Impl : ProblemModel {
     buildState(w, g.phase, t);
     robots::WholeBodyModel& m = *w.model;
     const State& st = w.st;
-    const auto& d = model_template.description();
     out.t = t;
     out.ineq.resize(ineq_cnt[static_cast<std::size_t>(k)]);
     out.eq.resize(eq_cnt[static_cast<std::size_t>(k)]);
@@ -702,36 +713,10 @@ struct OverstepProblem::Impl : ProblemModel {
         ri += n;
       }
     }
-    // Objective terms (per unit time, normalised).
-    auto& T = out.terms;
-    T.fill(0.0);
-    for (int j = 0; j < 4; ++j) {
-      const int c = flex_coord[static_cast<std::size_t>(j)];
-      T[0] += st.a(c) * st.a(c);
-      T[1] += st.v(c) * st.v(c) / 0.01;
-      T[2] += st.q(c) * st.q(c) / 1e-4;
-    }
-    const core::Vector6d hc = m.centroidalMomentum();
-    T[3] = (hc(2) / (mass * 0.1)) * (hc(2) / (mass * 0.1));
-    const Eigen::Vector3d cdd = m.comAcceleration();
-    T[4] = cdd.z() * cdd.z();
-    const Eigen::Vector3d com = m.com();
-    const core::Vector6d Wc = core::shiftWrench(st.W_O, Eigen::Vector3d::Zero(), com);
-    T[5] = (Wc(2) / 10.0) * (Wc(2) / 10.0);
-    for (int f = 0; f < 2; ++f) {
-      if (!st.contact[f]) continue;
-      const double mz = (st.sole[f].linear().transpose() * st.wrench[f].head<3>()).z();
-      T[6] += (mz / 5.0) * (mz / 5.0);
-    }
-    const Eigen::Vector2d zwb = core::zmpFromWrench(st.W_O);
-    const Eigen::Vector2d ztc = core::tableCartZmp(com, cdd, d.gravity);
-    T[7] = (zwb - ztc).squaredNorm() / 1e-4;
-    if (head_frame >= 0) {
-      const Eigen::Matrix3d Rh = m.framePose(head_frame).linear();
-      const double hy = yawOf(Rh), hp = pitchOf(Rh) - cfg.head_pitch_offset, hr = rollOf(Rh);
-      T[9] = (hy * hy + hp * hp + hr * hr) / 0.0025;
-    }
-    T[11] = st.ik_seed_gap / 0.0025;
+    // Sample costs (per unit time, normalised), each in the slot of its name.
+    out.terms.fill(0.0);
+    for (const auto& [slot, cost] : sample_costs)
+      out.terms[static_cast<std::size_t>(slot)] = cost->value(*this, sd);
     out.tau = st.tau_act;
   }
 
