@@ -31,10 +31,12 @@ const std::vector<Family>& OverstepProblem::equalityFamilies() const { return im
 double OverstepProblem::toesX() const { return impl_->toes_x; }
 int OverstepProblem::evaluationCount() const { return impl_->evaluations.load(); }
 const WorkAccount& OverstepProblem::work() const { return impl_->work; }
-void OverstepProblem::setDifficulty(double h, double box) {
+void OverstepProblem::setDifficulty(double h, double box, bool last_stage) {
   impl_->height = h;
   impl_->cop_box = box;
+  impl_->last_stage = last_stage;
 }
+bool OverstepProblem::lastStage() const { return impl_->last_stage; }
 double OverstepProblem::currentHeight() const { return impl_->height; }
 double OverstepProblem::currentCopBox() const { return impl_->cop_box; }
 

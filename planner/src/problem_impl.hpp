@@ -560,7 +560,7 @@ struct OverstepProblem::Impl : ProblemModel {
   /// instead of 56 and the 20 cm run reached its 20 cm stage after 394 s instead of 127 s
   /// (measured).
   double liftWeight(const Workspace& w, int phase, double t) const {
-    if (liftingFoot(phase) < 0 || !finalBox()) return 1.0;
+    if (liftingFoot(phase) < 0 || !last_stage) return 1.0;
     const double s =
         std::clamp((t - w.timing->start(phase)) / w.timing->durations()(phase), 0.0, 1.0);
     return (1.0 - s) + kLiftWeightFloor;

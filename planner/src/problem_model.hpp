@@ -110,9 +110,9 @@ struct ProblemModel {
   core::ObstacleSpec obstacle;
   double height = 0.2;
   double cop_box = 0.01;
-  /// The homotopy's last stage (the target CoP box): the lift-off rows at the check's scale and
-  /// the pelvis at pelvis_margin.
-  bool finalBox() const { return std::abs(cop_box - cfg.cop_box) < 1e-12; }
+  /// The homotopy's last stage (the target problem): the lift-off rows at the check's scale, the
+  /// pelvis at pelvis_margin and the lifting foot's load share ramped (liftWeight).
+  bool last_stage = true;
   VariableLayout lay;
   int n_ctrl = 0;  // control points per curve
   double mass = 0.0, mg = 0.0, toes_x = 0.13;

@@ -404,13 +404,13 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     problem.bounds(lo, hi);
     x = warm_start->cwiseMax(lo).cwiseMin(hi);
     stages.erase(stages.begin(), stages.end() - 1);
-    problem.setDifficulty(stages.front().first, stages.front().second);
+    problem.setDifficulty(stages.front().first, stages.front().second, true);
     if (on_stage) on_stage("warm start: restoring feasibility, then only the target stage");
     const RestorationResult rest = restore(x, 60);
     x = rest.x;
     out.iterations += rest.iterations;
   } else {
-    problem.setDifficulty(stages.front().first, stages.front().second);
+    problem.setDifficulty(stages.front().first, stages.front().second, stages.size() == 1);
     x = problem.initialGuess();
     if (on_stage) on_stage("restoring feasibility of the kinematic guess (Levenberg-Marquardt)");
     const RestorationResult rest = restore(x, 60);
@@ -418,7 +418,7 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     out.iterations += rest.iterations;
   }
   for (std::size_t i = 0; i < stages.size(); ++i) {
-    problem.setDifficulty(stages[i].first, stages[i].second);
+    problem.setDifficulty(stages[i].first, stages[i].second, i + 1 == stages.size());
     if (on_stage) {
       char buf[128];
       std::snprintf(buf, sizeof buf, "stage %zu/%zu: obstacle %.3f m, CoP box %.3f m", i + 1,
@@ -478,8 +478,7 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
   out.split.derivatives = work1.derivatives_s - work0.derivatives_s;
   out.split.other = out.solve_time - out.split.evaluations - out.split.derivatives -
                     out.split.nlopt - out.split.restoration;
-  const bool at_target = std::abs(problem.currentHeight() - target_h) < 1e-12 &&
-                         std::abs(problem.currentCopBox() - cfg.cop_box) < 1e-12;
+  const bool at_target = problem.lastStage();  // false when the solve ended before it
   out.valid = at_target && out.final.max_violation <= kFeasibilityTolerance;
   for (int f = 0; f < static_cast<int>(Family::kCount); ++f) {
     if (out.final.evaluation.worst[static_cast<std::size_t>(f)] > kFeasibilityTolerance)

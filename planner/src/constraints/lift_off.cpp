@@ -24,8 +24,8 @@ class LiftOff final : public EventTerm {
     const int lifting = ProblemModel::liftingFoot(ProblemModel::eventPhase(d.event));
     Eigen::Vector3d mo, fo;
     soleWrench(*d.st, lifting, mo, fo);
-    const double fn = p.finalBox() ? kLiftOffNormal * p.mg : p.mg;
-    const double ms = (p.finalBox() ? 0.5 : 1.0) * p.mg * kCopScale;
+    const double fn = p.last_stage ? kLiftOffNormal * p.mg : p.mg;
+    const double ms = (p.last_stage ? 0.5 : 1.0) * p.mg * kCopScale;
     out[0] = fo.z() / fn;
     out[1] = mo.x() / ms;
     out[2] = mo.y() / ms;

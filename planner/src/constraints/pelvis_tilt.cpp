@@ -14,7 +14,7 @@ class PelvisTilt final : public SampleTerm {
     const Eigen::Matrix3d Rb = d.model->framePose(p.base_frame).linear();
     const double roll = rollOf(Rb), pitch = pitchOf(Rb),
                  eps =
-                     p.cfg.pelvis_tilt * (p.finalBox() ? p.cfg.pelvis_margin : p.cfg.limit_margin);
+                     p.cfg.pelvis_tilt * (p.last_stage ? p.cfg.pelvis_margin : p.cfg.limit_margin);
     out[0] = (roll - eps) / eps;
     out[1] = (-roll - eps) / eps;
     out[2] = (pitch - eps) / eps;

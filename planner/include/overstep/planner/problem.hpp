@@ -104,7 +104,10 @@ class OverstepProblem {
   /// so that every column of the Jacobian has a comparable size.
   Eigen::VectorXd variableScale() const;
   /// Homotopy parameters: the obstacle height in use and the CoP box side.
-  void setDifficulty(double obstacle_height, double cop_box);
+  /// `last_stage`: the target problem (the lift-off rows at the check's scale, the pelvis at
+  /// pelvis_margin, the lifting foot's load share ramped); a new problem starts there.
+  void setDifficulty(double obstacle_height, double cop_box, bool last_stage);
+  bool lastStage() const;
   double currentHeight() const;
   double currentCopBox() const;
 
