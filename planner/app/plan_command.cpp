@@ -102,6 +102,10 @@ int runPlan(const PlanOptions& o) {
                             " m: no plan exists");
     }
   }
+  // From here on Ctrl-C or SIGTERM (a job scheduler's stop, `timeout`, `kill`) stops the solve
+  // and keeps the best attempt; installed before the first line of output, so that a signal
+  // sent after it never kills the process outright.
+  const cli::StopSignals stop;
   planner::OverstepProblem problem(model, cfg, ob);
   Eigen::VectorXd warm;
   if (!o.warm_start.empty()) {
@@ -127,7 +131,6 @@ int runPlan(const PlanOptions& o) {
     std::fflush(log);
   };
   auto solver = planner::makeNloptSolver(cfg.solver, row, &cli::StopSignals::flag());
-  const cli::StopSignals stop(false);  // Ctrl-C stops the solve and keeps the best so far
   planner::PlanOutcome out;
   if (o.resample) {
     // No solve: the stored solution, evaluated and sampled with this configuration.
@@ -332,7 +335,7 @@ void registerPlanCommands(CLI::App& app, cli::Registry& registry) {
       "  overstep plan --obstacle-shape cylinder --json > summary.json\n"
       "  overstep plan --obstacle-height 0.05 --warm-start small.failed.json --out small.json\n"
       "Exit: 0 valid plan written; 2 bad input; 3 no valid plan (best attempt in\n"
-      "<out>.failed.json); 130 interrupted (Ctrl-C keeps the best attempt).");
+      "<out>.failed.json); 130 interrupted (Ctrl-C or SIGTERM keeps the best attempt).");
   registry.add(plan, [po] { return runPlan(*po); });
 
   auto co = std::make_shared<CheckOptions>();
