@@ -75,10 +75,17 @@ class YamlReader {
     }
   }
 
-  /// A finite number held by `node` itself.
+  /// The largest magnitude of any number in our YAML files: far beyond every quantity of a robot,
+  /// a planner or a simulation in SI units (the largest in the shipped files is 1e4), far below
+  /// where sums and products overflow (issue 20: 1e308 reached DART's and FCL's assertions).
+  static constexpr double kMaxMagnitude = 1e9;
+
+  /// A finite number of magnitude at most kMaxMagnitude held by `node` itself.
   double value(const YAML::Node& node, const std::string& key) const {
     const double v = as<double>(node, key);
     if (!std::isfinite(v)) fail(key, "expected a finite number, got " + fmt(v));
+    if (std::abs(v) > kMaxMagnitude)
+      fail(key, "expected a magnitude of at most " + fmt(kMaxMagnitude) + ", got " + fmt(v));
     return v;
   }
   double valueAtLeast(const YAML::Node& node, const std::string& key, double min) const {
