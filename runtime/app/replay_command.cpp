@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "overstep/cli/command.hpp"
+#include "overstep/cli/lcm_url.hpp"
 #include "overstep/core/error.hpp"
 #include "overstep/msgs/convert.hpp"
 #include "overstep/plan_reference_t.hpp"
@@ -95,7 +96,7 @@ class ReplayProcess {
   ReplayProcess(const ReplayCliOptions& o, Clock clock, const runtime::PlanTrack& track,
                 const stabilizer::Params& params, const runtime::ReplayOptions& ro)
       : o_(o), clock_(clock), track_(track), replay_(track, params, ro), lcm_(o.lcm_url) {
-    if (!lcm_.good()) throw InputError("cannot open LCM at '" + o.lcm_url + "'");
+    cli::lcmOpened(lcm_.good(), o.lcm_url, lcm_said_);
     state_.resize(track.joints());
     auto* s = lcm_.subscribe("OVERSTEP_STATE", &ReplayProcess::onState, this);
     s->setQueueCapacity(1000);
@@ -468,6 +469,7 @@ class ReplayProcess {
   Clock clock_;
   const runtime::PlanTrack& track_;
   runtime::Replay replay_;
+  core::StderrCapture lcm_said_;  // what liblcm prints while lcm_ opens (into the error line)
   lcm::LCM lcm_;
   double period_ = 0.005;
   core::RobotState state_;
@@ -502,6 +504,7 @@ int runReplay(const ReplayCliOptions& o) {
   if (!(o.linger >= 0.0)) throw InputError("--linger: expected >= 0 s");
   if (!(o.state_timeout > 0.0)) throw InputError("--state-timeout: expected > 0 s");
   if (o.watchdog < 1) throw InputError("--watchdog: expected >= 1 period");
+  cli::checkLcmUrl(o.lcm_url);
   // Everything is validated before anything is sent: the plan, the model, the parameters.
   const core::Plan plan = core::loadPlan(o.plan);
   robots::WholeBodyModel model = robots::WholeBodyModel::fromFile(o.robot);

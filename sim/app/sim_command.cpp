@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "overstep/cli/command.hpp"
+#include "overstep/cli/lcm_url.hpp"
 #include "overstep/core/error.hpp"
 #include "overstep/core/obstacle.hpp"
 #include "overstep/msgs/convert.hpp"
@@ -54,7 +55,7 @@ class SimProcess {
         lcm_(o.lcm_url),
         joints_(model.actuatedCount()),
         model_desc_(model.description()) {
-    if (!lcm_.good()) throw InputError("cannot open LCM at '" + o.lcm_url + "'");
+    cli::lcmOpened(lcm_.good(), o.lcm_url, lcm_said_);
     auto* sub = lcm_.subscribe("OVERSTEP_COMMAND", &SimProcess::onCommand, this);
     sub->setQueueCapacity(1000);  // drain everything; the newest valid command wins
     steps_per_period_ = static_cast<int>(std::lround(1.0 / (o.rate * 0.001)));
@@ -248,6 +249,7 @@ class SimProcess {
   SimCliOptions o_;
   sim::Simulator sim_;
   sim::SensorNoise noise_;
+  core::StderrCapture lcm_said_;  // what liblcm prints while lcm_ opens (into the error line)
   lcm::LCM lcm_;
   int joints_;
   int steps_per_period_ = 5;
@@ -268,6 +270,7 @@ int runSim(const SimCliOptions& o) {
   if (!(o.noise >= 0.0 && std::isfinite(o.noise))) throw InputError("--noise: expected >= 0");
   if (!(o.hold_timeout > 0.0)) throw InputError("--hold-timeout: expected > 0 s");
   if (!(o.duration >= 0.0)) throw InputError("--duration: expected >= 0 s");
+  cli::checkLcmUrl(o.lcm_url);
   SimCliOptions checked = o;
   checked.obstacle.shape = core::parseObstacleShape(o.obstacle_shape);
   if (!o.no_obstacle) core::validate(checked.obstacle);
