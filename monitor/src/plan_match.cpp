@@ -53,8 +53,8 @@ void checkPlanReference(const overstep::plan_reference_t& ref, const core::Plan&
 void checkJointCount(int num_joints, int joints, const std::string& channel, const std::string& log,
                      const std::string& plan_path) {
   if (num_joints != joints)
-    throw InputError(log + ": " + channel + " carries " + std::to_string(num_joints) +
-                     " joints, " + plan_path + " and its robot have " + std::to_string(joints) +
+    throw InputError(log + ": " + channel + " carries " + std::to_string(num_joints) + " joints, " +
+                     plan_path + " and its robot have " + std::to_string(joints) +
                      " (a run of another robot?)");
 }
 

@@ -296,6 +296,20 @@ TEST(Yaml, NumbersBeyondTheMagnitudeCapAreRefusedWithTheirKey) {
   }
 }
 
+// Found by tests/fuzz/fuzz_robot: a list, map or null as a key threw yaml-cpp's
+// TypedBadConversion out of the readers ("internal error").
+TEST(Yaml, KeysThatAreNotPlainScalarsAreRefused) {
+  for (const char* text : {"{[a]: 1}", "a:\n  {b: 1}: 2\n", "~: 1", "- {? [x, y]: 1}"}) {
+    try {
+      core::YamlReader::parse(text, "f.yaml");
+      ADD_FAILURE() << text << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("expected a plain key"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_NO_THROW(core::YamlReader::parse("a: {b: 1, \"c d\": [1, 2]}\n", "f.yaml"));
+}
+
 // What a library prints on stderr while captured comes back as one line, and stderr is
 // restored afterwards.
 TEST(StderrCapture, ReturnsWhatWasPrintedAsOneLine) {

@@ -500,6 +500,41 @@ TEST(MonitorPlanMatch, APlanReferenceOfAnotherPlanIsNamed) {
   EXPECT_NO_THROW(monitor::checkJointCount(30, 30, "OVERSTEP_STATE", "a.lcmlog", "p.json"));
 }
 
+// Found by tests/fuzz/fuzz_msgs: lcm-gen's decoder copies a string's declared length - 1 bytes
+// after checking only the upper bound: length 0 threw std::length_error ("internal error" in
+// export), -2^31 read 2 GB past the buffer (SIGSEGV). The length is checked first, in each type
+// with a string, at its offset (the intact message decodes, so the offset is the right one).
+template <class T>
+void expectStringLengthChecked(const T& m, const std::string& text, int at) {
+  const auto good = test::encodeMsg(m);
+  monitor::AnyMessage msg;
+  ASSERT_EQ(monitor::decode(good.data(), static_cast<int>(good.size()), msg),
+            monitor::DecodeStatus::Ok);
+  std::uint32_t stored = 0;
+  for (int i = 0; i < 4; ++i) stored = (stored << 8) | good[static_cast<std::size_t>(at + i)];
+  ASSERT_EQ(stored, text.size() + 1) << "the string's length is not at byte " << at;
+  for (const std::uint32_t len : {0u, 0x80000000u, 0xffffffffu, 0x7fffffffu, 100000u}) {
+    auto bad = good;
+    for (int i = 0; i < 4; ++i)
+      bad[static_cast<std::size_t>(at + i)] = static_cast<std::uint8_t>(len >> (24 - 8 * i));
+    EXPECT_EQ(monitor::decode(bad.data(), static_cast<int>(bad.size()), msg),
+              monitor::DecodeStatus::Malformed)
+        << "length " << len;
+  }
+}
+
+TEST(MonitorDecode, StringLengthsAreCheckedBeforeDecoding) {
+  overstep::runtime_status_t r = test::makeRuntimeStatus();
+  r.fault_reason = "watchdog";
+  expectStringLengthChecked(r, r.fault_reason, 25);
+  overstep::plan_reference_t p{};
+  p.phase_name = "ds_start";
+  expectStringLengthChecked(p, p.phase_name, 44);
+  overstep::stabilizer_status_t st{};
+  st.fault_reason = "";
+  expectStringLengthChecked(st, st.fault_reason, 37);
+}
+
 TEST(MonitorRates, MatchTheLogsTimestamps) {
   TempDir dir;
   const SyntheticLog log = test::writeSyntheticLog(dir.file("a.lcmlog"), 2.0, 13);

@@ -29,7 +29,8 @@ class YamlReader {
   /// naming the file (and the line).
   static YAML::Node loadFile(const std::string& path) { return parse(readFile(path), path); }
   /// Parses YAML text read from `path` (named in the error). A key given twice in a map is
-  /// refused (yaml-cpp keeps both and every reader would take the first).
+  /// refused (yaml-cpp keeps both and every reader would take the first), and so is a key that is
+  /// not a plain scalar.
   static YAML::Node parse(const std::string& text, const std::string& path) {
     YAML::Node root;
     try {
@@ -149,7 +150,10 @@ class YamlReader {
     std::set<std::string> seen;
     for (const auto& kv : n) {
       const std::string key = join(where, scalarText(kv.first));
-      if (kv.first.IsScalar() && !seen.insert(kv.first.Scalar()).second)
+      // Every reader takes keys as strings: a list, map or null as a key threw yaml-cpp's
+      // TypedBadConversion, an "internal error" (found by tests/fuzz/fuzz_robot).
+      if (!kv.first.IsScalar()) throw InputError(path + ": " + key + ": expected a plain key");
+      if (!seen.insert(kv.first.Scalar()).second)
         throw InputError(path + ": " + key + ": duplicate key (again at line " +
                          std::to_string(kv.first.Mark().line + 1) + ")");
       refuseDuplicateKeys(kv.second, path, key, budget);
