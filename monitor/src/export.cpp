@@ -90,6 +90,14 @@ fs::path exportTarget(const std::string& dir) {
   if (!t.has_filename()) t = t.parent_path();
   if (!t.has_filename() || t == t.root_path())
     throw InputError(dir + ": cannot export into the root folder");
+  // DIR is replaced as a whole: never the folder a process (this one, its shell) works in.
+  const fs::path cwd = fs::current_path(ec);
+  if (!ec) {
+    const auto rel = cwd.lexically_relative(t);
+    if (!rel.empty() && *rel.begin() != "..")
+      throw InputError(dir + ": is the current folder or holds it (it is replaced as a whole): " +
+                       "export into a folder of its own");
+  }
   return t;
 }
 

@@ -404,6 +404,15 @@ TEST(MonitorExport, AFolderHoldingOtherFilesIsRefusedUntouched) {
   EXPECT_EQ(treeOf(dir.path().string()).size(), 3u);  // a.lcmlog, out, out/notes.txt
   test::writeText(dir.path() / "file", "x");
   EXPECT_THROW(monitor::exportCsv(dir.file("a.lcmlog"), dir.file("file"), {}), InputError);
+  // The folder this process works in (or one holding it) is never replaced.
+  std::filesystem::create_directories(dir.path() / "cwd" / "inner");
+  const auto before = std::filesystem::current_path();
+  std::filesystem::current_path(dir.path() / "cwd" / "inner");
+  EXPECT_THROW(monitor::exportCsv(dir.file("a.lcmlog"), ".", {}), InputError);
+  EXPECT_THROW(monitor::exportCsv(dir.file("a.lcmlog"), "..", {}), InputError);
+  EXPECT_TRUE(monitor::exportCsv(dir.file("a.lcmlog"), "csv", {}).written);  // a subfolder is fine
+  std::filesystem::current_path(before);
+  EXPECT_TRUE(std::filesystem::is_directory(dir.path() / "cwd" / "inner" / "csv"));
 }
 
 TEST(MonitorExport, AnInterruptedExportLeavesNothing) {
