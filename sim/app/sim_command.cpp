@@ -56,7 +56,7 @@ class SimProcess {
         joints_(model.actuatedCount()),
         model_desc_(model.description()) {
     cli::lcmOpened(lcm_.good(), o.lcm_url, lcm_said_);
-    auto* sub = lcm_.subscribe("OVERSTEP_COMMAND", &SimProcess::onCommand, this);
+    auto* sub = lcm_.subscribe("OVERSTEP_COMMAND", &SimProcess::onCommandBytes, this);
     sub->setQueueCapacity(1000);  // drain everything; the newest valid command wins
     steps_per_period_ = static_cast<int>(std::lround(1.0 / (o.rate * 0.001)));
     sim_.settle();  // start settled in half-sitting
@@ -153,6 +153,18 @@ class SimProcess {
   }
 
  private:
+  /// Decoded here, not by liblcm's typed subscription: its generated decoder sizes the joint
+  /// arrays from the message before checking the bytes (a 50-byte command declaring 2^31 - 1
+  /// joints asked for 48 GB). An undecodable command is rejected and counted like a bad one.
+  void onCommandBytes(const lcm::ReceiveBuffer* rb, const std::string& channel) {
+    std::string why;
+    if (!msgs::decodeChecked(rb->data, static_cast<int>(rb->data_size), cmd_msg_, &why)) {
+      reject("command of " + std::to_string(rb->data_size) + " bytes: " + why);
+      return;
+    }
+    onCommand(rb, channel, &cmd_msg_);
+  }
+
   void onCommand(const lcm::ReceiveBuffer*, const std::string&,
                  const overstep::robot_command_t* msg) {
     std::string why;
@@ -247,6 +259,7 @@ class SimProcess {
   }
 
   SimCliOptions o_;
+  overstep::robot_command_t cmd_msg_;  // the last command received, decoded (onCommandBytes)
   sim::Simulator sim_;
   sim::SensorNoise noise_;
   core::StderrCapture lcm_said_;  // what liblcm prints while lcm_ opens (into the error line)
