@@ -1,6 +1,7 @@
-// Fuzz target: every LCM message decoder (the generated types' decode(), monitor::decode, which
-// recognises them by fingerprint and checks joint counts first) and msgs_convert's fromLcm for
-// states and commands, as the runtime and the simulator receive them. Seeds:
+// Fuzz target: every LCM message decoder as it is used (monitor::decode for every type, which
+// checks joint counts and string lengths first; msgs::decodeChecked for states and commands, as
+// the runtime and the simulator receive them; the replay control's generated decoder) and
+// msgs_convert's fromLcm. Seeds:
 // tests/fuzz/corpus/msgs/ (one encoded message of each type).
 #include <cstdint>
 #include <string>
@@ -27,25 +28,27 @@ void raw(const std::uint8_t* data, std::size_t size) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace overstep;
   if (size > (1u << 20)) return 0;
-  // Unguarded generated decoding happens where a process subscribes with a typed handler: the
-  // runtime's OVERSTEP_REPLAY_CONTROL (no arrays, no strings) is fuzzed raw here. The runtime's
-  // states and the simulator's commands are decoded the same way, and lcm-gen 1.3 resizes their
-  // joint arrays to the declared count before checking the bytes (2^31 - 1 joints: 16 GB per
-  // array; a negative count: std::length_error): not fuzzed raw until they are decoded through
-  // a checked gate (issue 20, deliverable 5, open). The status types' strings are read past the
-  // buffer by the generated code for lengths <= 0; they are only decoded through monitor::decode,
-  // which checks lengths first, as below.
+  // What the processes decode from the bus: the runtime's OVERSTEP_REPLAY_CONTROL through
+  // liblcm's typed subscription (no arrays, no strings: the generated decoder as it is), the
+  // runtime's states and the simulator's commands through msgs::decodeChecked (lcm-gen resizes
+  // their joint arrays before checking the bytes), then fromLcm as they use it.
   raw<overstep::replay_control_t>(data, size);
+  std::string why;
+  overstep::robot_command_t command;
+  core::RobotCommand cmd;
+  if (msgs::decodeChecked(data, static_cast<int>(size), command, &why))
+    (void)msgs::fromLcm(command, 30, cmd, &why);
+  overstep::robot_state_t state;
+  core::RobotState st;
+  if (msgs::decodeChecked(data, static_cast<int>(size), state, &why))
+    (void)msgs::fromLcm(state, 30, st, &why);
+  // The status types' strings are read past the buffer by the generated code for lengths <= 0;
+  // they are decoded through monitor::decode only, which checks lengths first.
   monitor::AnyMessage msg;
   if (monitor::decode(data, static_cast<int>(size), msg) != monitor::DecodeStatus::Ok) return 0;
-  std::string why;
   if (auto* s = std::get_if<overstep::robot_state_t>(&msg)) {
-    core::RobotState st;
-    (void)msgs::fromLcm(*s, 30, st, &why);
     (void)msgs::fromLcm(*s, s->num_joints, st, &why);
   } else if (auto* c = std::get_if<overstep::robot_command_t>(&msg)) {
-    core::RobotCommand cmd;
-    (void)msgs::fromLcm(*c, 30, cmd, &why);
     (void)msgs::fromLcm(*c, c->num_joints, cmd, &why);
   }
   std::vector<monitor::Cell> cells;
