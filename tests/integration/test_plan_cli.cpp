@@ -30,10 +30,13 @@ TEST(PlanCli, BadInputIsExitTwoWithOneLine) {
        {"plan --obstacle-height -0.2", "plan --obstacle-height tall", "plan --obstacle-width 0",
         "plan --obstacle-shape sphere", "plan --margin -1", "plan --robot /nonexistent.yaml",
         "plan --threads -2", "plan --excite 1", "plan --excite 5 --amplitude 3",
-        "plan --excite 5 --stand 5", "plan --resample"}) {
+        "plan --excite 5 --stand 5", "plan --resample",
+        // Issue 20: 0 was taken as "not given" and started a full solve.
+        "plan --stand 0", "plan --excite 0", "plan --stand 0 --excite 0", "plan --stand -1"}) {
     const RunResult r = run(args + out);
     EXPECT_EQ(r.code, 2) << args << ": " << r.err;
     EXPECT_NE(lastLine(r.err).find("error"), std::string::npos) << args << ": " << r.err;
+    EXPECT_LT(r.seconds, 60.0) << args << ": refused at once, not after a solve";
   }
   test::writeText(dir.path() / "bad.yaml", "cop_box: [1\n");
   const RunResult r = run("plan --config " + dir.file("bad.yaml") + out);
