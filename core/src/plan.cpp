@@ -242,6 +242,7 @@ void writeFileAtomic(const std::string& path, const std::string& text) {
   const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw InputError(path + ": directory does not exist");
+  if (fs::is_directory(target, ec)) throw InputError(path + ": is a folder (give a file name)");
   const fs::path tmp =
       dir / ("." + target.filename().string() + ".tmp." + std::to_string(::getpid()));
   {

@@ -310,6 +310,30 @@ TEST(Yaml, KeysThatAreNotPlainScalarsAreRefused) {
   EXPECT_NO_THROW(core::YamlReader::parse("a: {b: 1, \"c d\": [1, 2]}\n", "f.yaml"));
 }
 
+// Issue 20: a folder given as a file was "no such file", and writing onto one said "(Success)".
+TEST(Files, AFolderIsNamedAsSuchWhenReadOrWritten) {
+  TempDir dir;
+  auto message = [](auto fn) {
+    try {
+      fn();
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message([&] { core::readFile(dir.path().string()); }),
+            dir.path().string() + ": is a folder, not a file");
+  EXPECT_EQ(message([&] { core::readFile(dir.file("missing")); }),
+            dir.file("missing") + ": no such file");
+  std::filesystem::create_directory(dir.path() / "out.json");
+  EXPECT_EQ(message([&] { core::writeFileAtomic(dir.file("out.json"), "{}"); }),
+            dir.file("out.json") + ": is a folder (give a file name)");
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()),
+                          std::filesystem::directory_iterator()),
+            1)
+      << "a temporary file was left";
+}
+
 // What a library prints on stderr while captured comes back as one line, and stderr is
 // restored afterwards.
 TEST(StderrCapture, ReturnsWhatWasPrintedAsOneLine) {
