@@ -15,5 +15,8 @@ if [ "${OVERSTEP_SKIP_SANITIZE:-0}" != 1 ]; then
   cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" \
         -DOVERSTEP_WERROR=ON -DOVERSTEP_SANITIZE=ON -DOVERSTEP_BUILD_BENCH=OFF >/dev/null
   cmake --build build-asan -j"$jobs" --target unit_tests  # only what this job runs
-  ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-asan -j"$jobs" -L unit --output-on-failure --timeout 1500
+  # Problem.EqualityJacobianIsWellConditioned (142 s under ASan, 8 s in Release, where it runs)
+  # makes room for the fuzz targets (label unit, tests/fuzz/README.md).
+  ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-asan -j"$jobs" -L unit \
+    -E '^Problem\.EqualityJacobianIsWellConditioned$' --output-on-failure --timeout 1500
 fi

@@ -21,7 +21,9 @@
 #include <thread>
 
 #include "overstep/cli/command.hpp"
+#include "overstep/cli/lcm_url.hpp"
 #include "overstep/core/error.hpp"
+#include "overstep/core/json_depth.hpp"
 #include "overstep/core/plan.hpp"
 #include "overstep/core/robot_description.hpp"
 
@@ -108,7 +110,14 @@ int stop(pid_t pid, int sig, double grace_s) {
   return code;
 }
 
-json readJson(const fs::path& p) { return json::parse(readAll(p), nullptr, false); }
+/// A JSON file written by a child command (its summary); discarded when unreadable or nested
+/// deeper than any of ours (parsing recurses).
+json readJson(const fs::path& p) {
+  const std::string text = readAll(p);
+  constexpr int kMaxDepth = 32;
+  if (core::jsonDepth(text, kMaxDepth) > kMaxDepth) return json(json::value_t::discarded);
+  return json::parse(text, nullptr, false);
+}
 
 std::string utcStamp() {
   const std::time_t t = std::time(nullptr);
@@ -389,6 +398,12 @@ json identifyLoop(const DemoOptions& o, const fs::path& run) {
 int runDemo(const DemoOptions& o) {
   if (!(o.timeout > 0.0)) throw InputError("--timeout: expected > 0 s");
   if (!(o.plan_time_limit >= 0.0)) throw InputError("--plan-time-limit: expected >= 0 s");
+  if (!o.lcm_url.empty()) {
+    cli::checkLcmUrl(o.lcm_url);
+    if (o.lcm_url.rfind("udpm://", 0) != 0)
+      throw InputError("--lcm-url '" + o.lcm_url +
+                       "': the demo's processes share the bus: expected udpm://GROUP:PORT?ttl=N");
+  }
   if (!fs::is_regular_file(o.robot)) throw InputError("robot file not found: " + o.robot);
   if (!o.config.empty() && !fs::is_regular_file(o.config))
     throw InputError("planner config not found: " + o.config);

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "overstep/core/error.hpp"
+#include "overstep/core/json_depth.hpp"
 #include "overstep/core/robot_description.hpp"
 
 namespace overstep::core {
@@ -39,29 +40,6 @@ std::string num(double v) {
   char b[64];
   std::snprintf(b, sizeof b, "%.10g", v);
   return b;
-}
-
-/// Deepest nesting of arrays and objects in JSON text (brackets inside strings do not count);
-/// stops counting once past `cap`, so that nlohmann-json never recurses that deep.
-int jsonDepth(const std::string& text, int cap) {
-  int depth = 0, deepest = 0;
-  bool in_string = false;
-  for (std::size_t i = 0; i < text.size() && deepest <= cap; ++i) {
-    const char c = text[i];
-    if (in_string) {
-      if (c == '\\')
-        ++i;
-      else if (c == '"')
-        in_string = false;
-    } else if (c == '"') {
-      in_string = true;
-    } else if (c == '[' || c == '{') {
-      deepest = std::max(deepest, ++depth);
-    } else if (c == ']' || c == '}') {
-      --depth;
-    }
-  }
-  return deepest;
 }
 
 /// A JSON value for an error message: one line, at most 40 characters.
@@ -137,6 +115,27 @@ class PlanReader {
 };
 
 }  // namespace
+
+int jsonDepth(const std::string& text, int cap) {
+  int depth = 0, deepest = 0;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size() && deepest <= cap; ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\')
+        ++i;
+      else if (c == '"')
+        in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      deepest = std::max(deepest, ++depth);
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return deepest;
+}
 
 int Plan::sampleAt(double time, int which_phase) const {
   const int n = samples();
@@ -243,6 +242,7 @@ void writeFileAtomic(const std::string& path, const std::string& text) {
   const fs::path dir = target.parent_path().empty() ? fs::path(".") : target.parent_path();
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw InputError(path + ": directory does not exist");
+  if (fs::is_directory(target, ec)) throw InputError(path + ": is a folder (give a file name)");
   const fs::path tmp =
       dir / ("." + target.filename().string() + ".tmp." + std::to_string(::getpid()));
   {

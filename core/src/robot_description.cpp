@@ -32,9 +32,11 @@ std::uint64_t fnv1a64(const std::string& bytes, std::uint64_t seed) {
 
 std::string readFile(const std::string& path) {
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) {
-    throw InputError(path + ": no such file");
-  }
+  const auto st = std::filesystem::status(path, ec);
+  if (std::filesystem::is_directory(st)) throw InputError(path + ": is a folder, not a file");
+  if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
+    throw InputError(path + ": not a regular file");  // a FIFO or a device would block or stream
+  if (!std::filesystem::is_regular_file(st)) throw InputError(path + ": no such file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot be read");
   std::ostringstream ss;

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "overstep/cli/command.hpp"
+#include "overstep/cli/lcm_url.hpp"
 #include "overstep/core/error.hpp"
 #include "overstep/core/robot_description.hpp"
 #include "overstep/monitor/export.hpp"
@@ -60,6 +61,7 @@ std::string spyClasspath() {
 }
 
 int runSpy(const SpyOptions& o) {
+  cli::checkLcmUrl(o.lcm_url);  // the Java spy takes the same URLs
   const std::string cp = spyClasspath();
   if (o.print_classpath) {
     std::cout << cp << "\n";
@@ -147,8 +149,10 @@ class LiveFeed {
 };
 
 int monitorLive(const MonitorOptions& o) {
+  cli::checkLcmUrl(o.lcm_url);
+  core::StderrCapture said;  // what liblcm prints while it opens goes into the error line
   lcm::LCM lcm(o.lcm_url);
-  if (!lcm.good()) throw InputError("cannot open LCM at '" + o.lcm_url + "'");
+  cli::lcmOpened(lcm.good(), o.lcm_url, said);
   monitor::Monitor mon(o.window);
   LiveFeed feed(mon);
   lcm.subscribe(".*", &LiveFeed::handle, &feed);
@@ -191,7 +195,13 @@ int runExport(const ExportOptions& o) {
     const core::RobotDescription d = core::loadRobotDescription(o.robot);
     for (const auto& a : d.actuated) joints.push_back(a.name);
   }
-  const monitor::ExportSummary s = monitor::exportCsv(o.log, o.dir, joints);
+  const cli::StopSignals stop;  // Ctrl-C / SIGTERM: the temporary folder is removed, DIR kept
+  const monitor::ExportSummary s =
+      monitor::exportCsv(o.log, o.dir, joints, &cli::StopSignals::flag());
+  if (s.interrupted) {
+    cli::printError("export", "interrupted; " + o.dir + " left as it was");
+    return kExitInterrupted;
+  }
   if (o.json) {
     nlohmann::json j;
     j["events"] = s.events;
@@ -200,19 +210,26 @@ int runExport(const ExportOptions& o) {
     j["skipped"] = s.skipped;
     j["break_offset"] = s.break_offset;
     j["break_reason"] = s.break_reason;
+    j["written"] = s.written;
     std::cout << jsonText(j, 2) << "\n";
   } else {
-    for (const auto& [ch, n] : s.rows)
+    for (const auto& [ch, n] : s.rows) {
+      const auto f = s.files.find(ch);
       std::fprintf(stderr, "  %-24s %8lld rows -> %s\n", ch.c_str(), static_cast<long long>(n),
-                   s.files.at(ch).c_str());
+                   f == s.files.end() ? "(not written)" : f->second.c_str());
+    }
     for (const auto& [ch, n] : s.skipped)
       std::fprintf(stderr, "  %-24s %8lld messages not ours or undecodable (skipped)\n", ch.c_str(),
                    static_cast<long long>(n));
   }
   if (s.break_offset >= 0) {
     throw InputError(o.log + ": damaged at byte " + std::to_string(s.break_offset) + " (" +
-                     s.break_reason + "); exported the " + std::to_string(s.events) +
-                     " events before it");
+                     s.break_reason + "); " +
+                     (s.written ? "exported the " + std::to_string(s.events) + " events before it"
+                                : o.dir +
+                                      " keeps its previous export (only a complete log "
+                                      "replaces it; export into a new folder for the " +
+                                      std::to_string(s.events) + " events before the break)"));
   }
   return kExitOk;
 }
@@ -224,6 +241,7 @@ struct ReportCliOptions {
 };
 
 int runReport(const ReportCliOptions& o) {
+  monitor::checkReportOptions(o.r);
   if (!fs::is_directory(o.r.run_dir)) throw InputError(o.r.run_dir + ": no such run folder");
   std::fprintf(stderr, "report: aligning the log with the plan, drawing the figures ...\n");
   const monitor::ReportSummary s = monitor::makeReport(o.r);
@@ -304,7 +322,10 @@ void registerMonitorCommands(CLI::App& app, cli::Registry& registry) {
       "  overstep export runs/<run>/bus.lcmlog --csv runs/<run>/csv\n"
       "  overstep export bus.lcmlog --csv out --json | jq .rows\n"
       "Columns: log_time [us] (logger receive time), type, then every field, e.g.\n"
-      "'q[RLEG_JOINT0] [rad]'. Exit 2 on a damaged log after exporting what came before.");
+      "'q[RLEG_JOINT0] [rad]'. File names: the channel, other bytes than [A-Za-z0-9_.-] as %XX.\n"
+      "DIR is replaced as a whole at the end (written beside it first); a previous export\n"
+      "in it is replaced by a complete log's only. Exit 2 on a damaged log after exporting\n"
+      "what came before (into a new or empty DIR), 130 interrupted (DIR as it was).");
   registry.add(ex, [eo] { return runExport(*eo); });
 
   auto ro = std::make_shared<ReportCliOptions>();

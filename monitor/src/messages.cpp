@@ -1,6 +1,7 @@
 #include "overstep/monitor/messages.hpp"
 
 #include <cstring>
+#include <stdexcept>
 
 namespace overstep::monitor {
 namespace {
@@ -178,6 +179,38 @@ constexpr int kJointCountAt<overstep::robot_command_t> = 8 + 2 * 8;  // utime, s
 template <>
 constexpr int kJointCountAt<overstep::robot_state_t> = 8 + 3 * 8;  // utime, seq, last_command_seq
 
+/// Byte offset of the length of the one string field in the types that have one (after the
+/// fingerprint and the fixed-size fields before it; test_monitor checks each), -1 in the others.
+template <class T>
+constexpr int kStringAt = -1;
+template <>
+constexpr int kStringAt<overstep::plan_reference_t> = 8 + 4 * 8 + 4;  // ... plan_duration, phase
+template <>
+constexpr int kStringAt<overstep::runtime_status_t> = 8 + 2 * 8 + 1;  // utime, seq, state
+template <>
+constexpr int kStringAt<overstep::stabilizer_status_t> = 8 + 2 * 8 + 1 + 8 + 4;  // ... ramp, fault
+
+std::int32_t int32At(const unsigned char* b, int at) {
+  return static_cast<std::int32_t>((std::uint32_t{b[at]} << 24) | (std::uint32_t{b[at + 1]} << 16) |
+                                   (std::uint32_t{b[at + 2]} << 8) | std::uint32_t{b[at + 3]});
+}
+
+/// False when the string's declared length (bytes with its terminating NUL) is below 1 or beyond
+/// the message: lcm-gen 1.3's decoder copies length - 1 bytes after checking only the upper bound
+/// (found by tests/fuzz/fuzz_msgs: length 0 threw std::length_error, -2^31 read 2 GB past the
+/// buffer: SIGSEGV in export, monitor and report).
+template <class T>
+bool stringLengthFits(const unsigned char* b, int size) {
+  constexpr int at = kStringAt<T>;
+  if constexpr (at < 0) {
+    return true;
+  } else {
+    if (size < at + 4) return false;
+    const std::int32_t n = int32At(b, at);
+    return n >= 1 && n <= size - at - 4;
+  }
+}
+
 /// False when the declared joint count is negative or its arrays cannot fit in `size` bytes: the
 /// generated decoder resizes the arrays before it reads them (a negative count threw
 /// std::length_error, 2^26 joints in a 1 kB event allocated 512 MB).
@@ -200,10 +233,15 @@ DecodeStatus tryDecode(const void* data, int size, std::int64_t hash, AnyMessage
                        bool& matched) {
   if (matched || hash != T::getHash()) return DecodeStatus::UnknownType;
   matched = true;
-  if (!jointCountFits<T>(static_cast<const unsigned char*>(data), size))
+  if (!jointCountFits<T>(static_cast<const unsigned char*>(data), size) ||
+      !stringLengthFits<T>(static_cast<const unsigned char*>(data), size))
     return DecodeStatus::Malformed;
   T msg;
-  if (msg.decode(data, 0, size) != size) return DecodeStatus::Malformed;
+  try {  // belt and braces: what the generated code throws is a malformed message too
+    if (msg.decode(data, 0, size) != size) return DecodeStatus::Malformed;
+  } catch (const std::exception&) {
+    return DecodeStatus::Malformed;
+  }
   out = std::move(msg);
   return DecodeStatus::Ok;
 }

@@ -13,10 +13,12 @@
 #include <optional>
 
 #include "overstep/core/error.hpp"
+#include "overstep/core/json_depth.hpp"
 #include "overstep/core/plan.hpp"
 #include "overstep/core/rotation.hpp"
 #include "overstep/monitor/lcm_log.hpp"
 #include "overstep/monitor/messages.hpp"
+#include "overstep/monitor/plan_match.hpp"
 #include "overstep/robots/collision.hpp"
 #include "overstep/robots/leg.hpp"
 #include "overstep/robots/whole_body_model.hpp"
@@ -105,12 +107,22 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
   std::vector<Row> rows;
   while (reader.next(ev)) {
     if (decode(ev.data, ev.size, msg) != DecodeStatus::Ok) continue;
-    if (auto* s = std::get_if<overstep::robot_state_t>(&msg)) state = *s;
-    if (auto* c = std::get_if<overstep::robot_command_t>(&msg)) command = *c;
-    if (auto* p = std::get_if<overstep::plan_reference_t>(&msg)) ref = *p;
+    // Every message is checked against the plan (issue 20: another run's plan was drawn against
+    // this log, its phase index read past the plan's phases).
+    if (auto* s = std::get_if<overstep::robot_state_t>(&msg)) {
+      checkJointCount(s->num_joints, nA, ev.channel, o.log, o.plan);
+      state = *s;
+    }
+    if (auto* c = std::get_if<overstep::robot_command_t>(&msg)) {
+      checkJointCount(c->num_joints, nA, ev.channel, o.log, o.plan);
+      command = *c;
+    }
+    if (auto* p = std::get_if<overstep::plan_reference_t>(&msg)) {
+      checkPlanReference(*p, plan, o.log, o.plan);
+      ref = *p;
+    }
     auto* st = std::get_if<overstep::stabilizer_status_t>(&msg);
     if (!st || !ref || ref->seq != st->seq || !state || !command) continue;
-    if (state->num_joints != nA || command->num_joints != nA) continue;
     const double t = ref->plan_time;
     if (!rows.empty() && t <= rows.back().t) {
       if (t == 0.0 && rows.size() == 1)
@@ -297,7 +309,7 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
 
   // ---- frames.json: the side-view sequence, plan and measurement at the same plan times.
   nlohmann::json frames = nlohmann::json::array();
-  const int nf = std::max(2, o.frames);
+  const int nf = o.frames;
   for (int i = 0; i < nf; ++i) {
     const double t = rows.front().t + (rows.back().t - rows.front().t) * i / (nf - 1);
     std::size_t best = 0;
@@ -355,20 +367,37 @@ void runPlotScript(const std::string& python, const std::string& script,
   }
 }
 
+void checkReportOptions(const ReportOptions& o) {
+  if (o.dpi < 20 || o.dpi > 400) throw InputError("--dpi: expected 20..400");
+  // The sequence figure has a panel per frame, four to a row (issue 20: 100000 frames drew
+  // without end).
+  if (o.frames < 2 || o.frames > kMaxFrames)
+    throw InputError("--frames: expected 2 to " + std::to_string(kMaxFrames) + ", got " +
+                     std::to_string(o.frames));
+}
+
 ReportSummary makeReport(const ReportOptions& o_in) {
   ReportOptions o = o_in;
   if (o.out.empty()) o.out = (fs::path(o.run_dir) / "report").string();
   if (o.script.empty()) o.script = defaultScript();
-  if (o.dpi < 20 || o.dpi > 400) throw InputError("--dpi: expected 20..400");
+  checkReportOptions(o);
   ReportSummary sum;
   writeReportData(o, sum);
   if (!fs::exists(o.script)) throw InputError(o.script + ": plotting script not found");
   runPlotScript(o.python, o.script, {o.out, std::to_string(o.dpi)}, "report");
   sum.index_html = (fs::path(o.out) / "index.html").string();
   sum.manifest = (fs::path(o.out) / "report.json").string();
-  std::ifstream in(sum.manifest);
-  const nlohmann::json man = nlohmann::json::parse(in, nullptr, false);
-  if (man.is_discarded() || !man.contains("figures"))
+  std::string text;
+  {
+    std::ifstream in(sum.manifest);
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  constexpr int kMaxDepth = 32;  // the manifest nests 5 deep (figures[].axes[].series[])
+  const nlohmann::json man = core::jsonDepth(text, kMaxDepth) > kMaxDepth
+                                 ? nlohmann::json(nlohmann::json::value_t::discarded)
+                                 : nlohmann::json::parse(text, nullptr, false);
+  if (man.is_discarded() || !man.is_object() || !man.contains("figures") ||
+      !man["figures"].is_array())
     throw std::runtime_error("report: " + sum.manifest + " missing or unreadable");
   for (const auto& f : man["figures"])
     sum.figures.push_back((fs::path(o.out) / f["file"].get<std::string>()).string());

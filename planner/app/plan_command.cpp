@@ -29,14 +29,16 @@ struct PlanOptions {
   double height = 0.20, width = 0.11, gap = 0.03, margin = 0.0, time_limit = 0.0, rate = 200.0;
   int threads = 0;
   bool json = false, resample = false;
-  double stand = 0.0;   ///< > 0: write a static standing plan of this duration instead of solving
-  double excite = 0.0;  ///< > 0: write an identification excitation plan of this duration
+  double stand = 0.0;   ///< --stand: write a static standing plan of this duration instead
+  double excite = 0.0;  ///< --excite: write an identification excitation plan of this duration
+  /// Given on the command line (issue 20: `--stand 0` was taken as absent and started a solve).
+  bool stand_given = false, excite_given = false;
   double amplitude = 1.0;  ///< of the excitation
 };
 
 int runStand(const PlanOptions& o) {
   robots::WholeBodyModel model = robots::WholeBodyModel::fromFile(o.robot);
-  const bool excite = o.excite != 0.0;
+  const bool excite = o.excite_given;
   const core::Plan plan = excite ? planner::excitationPlan(model, o.excite, o.amplitude, o.rate)
                                  : planner::standingPlan(model, o.stand, o.rate);
   core::savePlan(plan, o.out);
@@ -61,8 +63,8 @@ std::string failedPath(const std::string& out) {
 }
 
 int runPlan(const PlanOptions& o) {
-  if (o.stand != 0.0 && o.excite != 0.0) throw InputError("choose one of --stand and --excite");
-  if (o.stand != 0.0 || o.excite != 0.0) return runStand(o);
+  if (o.stand_given && o.excite_given) throw InputError("choose one of --stand and --excite");
+  if (o.stand_given || o.excite_given) return runStand(o);
   core::ObstacleSpec ob;
   ob.shape = core::parseObstacleShape(o.shape);
   ob.height = o.height;
@@ -102,6 +104,10 @@ int runPlan(const PlanOptions& o) {
                             " m: no plan exists");
     }
   }
+  // From here on Ctrl-C or SIGTERM (a job scheduler's stop, `timeout`, `kill`) stops the solve
+  // and keeps the best attempt; installed before the first line of output, so that a signal
+  // sent after it never kills the process outright.
+  const cli::StopSignals stop;
   planner::OverstepProblem problem(model, cfg, ob);
   Eigen::VectorXd warm;
   if (!o.warm_start.empty()) {
@@ -127,7 +133,6 @@ int runPlan(const PlanOptions& o) {
     std::fflush(log);
   };
   auto solver = planner::makeNloptSolver(cfg.solver, row, &cli::StopSignals::flag());
-  const cli::StopSignals stop(false);  // Ctrl-C stops the solve and keeps the best so far
   planner::PlanOutcome out;
   if (o.resample) {
     // No solve: the stored solution, evaluated and sampled with this configuration.
@@ -310,13 +315,15 @@ void registerPlanCommands(CLI::App& app, cli::Registry& registry) {
   plan->add_option("--time-limit", po->time_limit,
                    "Seconds for the whole solve (default from config)");
   plan->add_option("--rate", po->rate, "Sample rate of the plan file, Hz")->capture_default_str();
-  plan->add_option("--excite", po->excite,
-                   "Write an identification experiment of this many seconds instead: standing, "
-                   "chest, head and arms swinging (overstep identify)");
+  CLI::Option* excite =
+      plan->add_option("--excite", po->excite,
+                       "Write an identification experiment of this many seconds instead: standing, "
+                       "chest, head and arms swinging (overstep identify)");
   plan->add_option("--amplitude", po->amplitude, "Scale of the --excite swings (0, 2]")
       ->capture_default_str();
-  plan->add_option("--stand", po->stand,
-                   "Write a static standing plan of this many seconds instead (runtime bring-up)");
+  CLI::Option* stand = plan->add_option(
+      "--stand", po->stand,
+      "Write a static standing plan of this many seconds instead (runtime bring-up)");
   plan->add_option("--warm-start", po->warm_start,
                    "Start from the solution stored in a plan file (same configuration): only the "
                    "target stage runs");
@@ -332,8 +339,12 @@ void registerPlanCommands(CLI::App& app, cli::Registry& registry) {
       "  overstep plan --obstacle-shape cylinder --json > summary.json\n"
       "  overstep plan --obstacle-height 0.05 --warm-start small.failed.json --out small.json\n"
       "Exit: 0 valid plan written; 2 bad input; 3 no valid plan (best attempt in\n"
-      "<out>.failed.json); 130 interrupted (Ctrl-C keeps the best attempt).");
-  registry.add(plan, [po] { return runPlan(*po); });
+      "<out>.failed.json); 130 interrupted (Ctrl-C or SIGTERM keeps the best attempt).");
+  registry.add(plan, [po, stand, excite] {
+    po->stand_given = stand->count() > 0;
+    po->excite_given = excite->count() > 0;
+    return runPlan(*po);
+  });
 
   auto co = std::make_shared<CheckOptions>();
   co->robot = cli::defaultRobotPath();

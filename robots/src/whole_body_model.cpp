@@ -11,10 +11,13 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <set>
 #include <unordered_map>
 
 #include "overstep/core/error.hpp"
+#include "overstep/core/stderr_capture.hpp"
 
 namespace overstep::robots {
 namespace {
@@ -23,12 +26,163 @@ using dart::dynamics::BodyNode;
 using dart::dynamics::Frame;
 using dart::dynamics::SkeletonPtr;
 
+/// Bounds of a URDF that urdfdom (TinyXML parses recursively: 100,000 nested elements overflowed
+/// the stack) and DART (assertions on huge or non-finite values) can be given.
+constexpr std::size_t kMaxUrdfBytes = 16u << 20;
+constexpr int kMaxXmlDepth = 64;  // a URDF is 4-5 deep: robot / link / inertial / origin
+constexpr std::size_t kMaxLinks = 1000;
+constexpr double kMaxLength = 100.0;    // m: origins, geometry
+constexpr double kMaxMass = 1e4;        // kg per link
+constexpr double kMaxInertia = 1e4;     // kg m^2 per entry
+constexpr double kMaxJointValue = 1e6;  // limits (rad, rad/s, N m), damping, friction
+
+/// The element nesting depth of `xml`, refused beyond kMaxXmlDepth before any parser sees it
+/// (comments, CDATA, processing instructions and declarations skipped, quoted attributes
+/// honoured). Not a validation of the XML: urdfdom does that.
+void checkXmlNesting(const std::string& xml, const std::string& path) {
+  if (xml.size() > kMaxUrdfBytes)
+    throw InputError(path + ": " + std::to_string(xml.size()) + " bytes, more than a URDF of " +
+                     std::to_string(kMaxUrdfBytes >> 20) + " MiB");
+  int depth = 0;
+  std::size_t i = 0;
+  const auto skipTo = [&](const char* end, std::size_t from) {
+    const std::size_t at = xml.find(end, from);
+    return at == std::string::npos ? xml.size() : at + std::strlen(end);
+  };
+  while ((i = xml.find('<', i)) != std::string::npos) {
+    if (xml.compare(i, 4, "<!--") == 0) {
+      i = skipTo("-->", i + 4);
+    } else if (xml.compare(i, 9, "<![CDATA[") == 0) {
+      i = skipTo("]]>", i + 9);
+    } else if (xml.compare(i, 2, "<?") == 0) {
+      i = skipTo("?>", i + 2);
+    } else if (xml.compare(i, 2, "<!") == 0 || xml.compare(i, 2, "</") == 0) {
+      if (xml[i + 1] == '/') --depth;
+      i = skipTo(">", i + 2);
+    } else {
+      std::size_t j = i + 1;
+      char quote = 0;
+      for (; j < xml.size(); ++j) {
+        const char c = xml[j];
+        if (quote) {
+          if (c == quote) quote = 0;
+        } else if (c == '"' || c == '\'') {
+          quote = c;
+        } else if (c == '>') {
+          break;
+        }
+      }
+      if (j < xml.size() && xml[j - 1] != '/' && ++depth > kMaxXmlDepth)
+        throw InputError(path + ": elements nested more than " + std::to_string(kMaxXmlDepth) +
+                         " deep (at byte " + std::to_string(i) + ")");
+      i = j + 1;
+    }
+  }
+}
+
+/// Throws "PATH: WHAT: expected finite, |x| <= LIMIT, got V" for the first bad value.
+void checkFinite(const std::string& path, const std::string& what, double v, double limit) {
+  if (!std::isfinite(v) || std::abs(v) > limit) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf, ": expected a finite value of magnitude <= %g, got %g", limit,
+                  v);
+    throw InputError(path + ": " + what + buf);
+  }
+}
+
+void checkPose(const std::string& path, const std::string& what, const urdf::Pose& pose) {
+  checkFinite(path, what + " origin xyz", pose.position.x, kMaxLength);
+  checkFinite(path, what + " origin xyz", pose.position.y, kMaxLength);
+  checkFinite(path, what + " origin xyz", pose.position.z, kMaxLength);
+  const urdf::Rotation& r = pose.rotation;
+  for (const double q : {r.x, r.y, r.z, r.w})
+    checkFinite(path, what + " origin rpy", q, 1.0 + 1e-9);
+}
+
+void checkGeometry(const std::string& path, const std::string& what,
+                   const urdf::GeometrySharedPtr& g) {
+  if (!g) return;
+  switch (g->type) {
+    case urdf::Geometry::SPHERE:
+      checkFinite(path, what + " sphere radius", static_cast<const urdf::Sphere&>(*g).radius,
+                  kMaxLength);
+      break;
+    case urdf::Geometry::BOX: {
+      const auto& b = static_cast<const urdf::Box&>(*g).dim;
+      for (const double v : {b.x, b.y, b.z}) checkFinite(path, what + " box size", v, kMaxLength);
+      break;
+    }
+    case urdf::Geometry::CYLINDER: {
+      const auto& c = static_cast<const urdf::Cylinder&>(*g);
+      checkFinite(path, what + " cylinder radius", c.radius, kMaxLength);
+      checkFinite(path, what + " cylinder length", c.length, kMaxLength);
+      break;
+    }
+    case urdf::Geometry::MESH: {
+      const auto& m = static_cast<const urdf::Mesh&>(*g).scale;
+      for (const double v : {m.x, m.y, m.z}) checkFinite(path, what + " mesh scale", v, 1e3);
+      break;
+    }
+  }
+}
+
+/// Every number urdfdom read from the URDF, finite and inside physical bounds, before DART sees
+/// them (issue 20: 1e308 reached DART's assertions).
+void checkUrdfValues(const urdf::ModelInterface& model, const std::string& path) {
+  if (model.links_.size() > kMaxLinks)
+    throw InputError(path + ": " + std::to_string(model.links_.size()) + " links, more than " +
+                     std::to_string(kMaxLinks));
+  for (const auto& [name, link] : model.links_) {
+    const std::string w = "link '" + name + "'";
+    if (const auto& in = link->inertial) {
+      checkPose(path, w + " inertial", in->origin);
+      checkFinite(path, w + " mass", in->mass, kMaxMass);
+      for (const double v : {in->ixx, in->ixy, in->ixz, in->iyy, in->iyz, in->izz})
+        checkFinite(path, w + " inertia", v, kMaxInertia);
+    }
+    for (const auto& c : link->collision_array) {
+      checkPose(path, w + " collision", c->origin);
+      checkGeometry(path, w + " collision", c->geometry);
+    }
+    for (const auto& v : link->visual_array) {
+      checkPose(path, w + " visual", v->origin);
+      checkGeometry(path, w + " visual", v->geometry);
+    }
+  }
+  for (const auto& [name, joint] : model.joints_) {
+    const std::string w = "joint '" + name + "'";
+    checkPose(path, w, joint->parent_to_joint_origin_transform);
+    const urdf::Vector3& a = joint->axis;
+    for (const double v : {a.x, a.y, a.z}) checkFinite(path, w + " axis", v, 1e3);
+    if (joint->type != urdf::Joint::FIXED && !(a.x * a.x + a.y * a.y + a.z * a.z > 1e-12))
+      throw InputError(path + ": " + w + " axis: expected a non-zero vector");
+    if (const auto& l = joint->limits) {
+      for (const double v : {l->lower, l->upper, l->effort, l->velocity})
+        checkFinite(path, w + " limit", v, kMaxJointValue);
+    }
+    if (const auto& dy = joint->dynamics) {
+      checkFinite(path, w + " damping", dy->damping, kMaxJointValue);
+      checkFinite(path, w + " friction", dy->friction, kMaxJointValue);
+    }
+  }
+}
+
 /// Checks the URDF against the description with urdfdom before DART sees it (Debian's DART aborts
-/// on assertions, so invalid masses must never reach it).
+/// on assertions, so invalid masses must never reach it). What urdfdom (and TinyXML) print goes
+/// into the one-line error.
 void validateUrdf(const core::RobotDescription& d, const std::string& urdf_text) {
   const std::string& path = d.urdf_path;
-  urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(urdf_text);
-  if (!model) throw InputError(path + ": malformed URDF (urdfdom could not parse it)");
+  checkXmlNesting(urdf_text, path);
+  urdf::ModelInterfaceSharedPtr model;
+  {
+    core::StderrCapture said;
+    model = urdf::parseURDF(urdf_text);
+    const std::string text = said.text();
+    if (!model)
+      throw InputError(path + ": malformed URDF (urdfdom: " +
+                       (text.empty() ? std::string("could not parse it") : text) + ")");
+  }
+  checkUrdfValues(*model, path);
   if (!model->getRoot() || model->getRoot()->name != d.base_link) {
     throw InputError(path + ": root link is '" + (model->getRoot() ? model->getRoot()->name : "") +
                      "', expected base_link '" + d.base_link + "' from " + d.yaml_path);
@@ -162,9 +316,15 @@ WholeBodyModel::WholeBodyModel(core::RobotDescription description)
                                    ? dart::utils::DartLoader::RootJointType::FLOATING
                                    : dart::utils::DartLoader::RootJointType::FIXED;
   dart::utils::DartLoader loader(opts);
-  m.skel =
-      loader.parseSkeletonString(urdf_text, dart::common::Uri::createFromPath(m.desc.urdf_path));
-  if (!m.skel) throw InputError(m.desc.urdf_path + ": DART could not build a skeleton from it");
+  {
+    core::StderrCapture said;  // DART's warnings and errors go into the error line
+    m.skel =
+        loader.parseSkeletonString(urdf_text, dart::common::Uri::createFromPath(m.desc.urdf_path));
+    const std::string text = said.text();
+    if (!m.skel)
+      throw InputError(m.desc.urdf_path + ": DART could not build a skeleton from it" +
+                       (text.empty() ? std::string() : " (" + text + ")"));
+  }
   m.skel->setGravity(Eigen::Vector3d(0.0, 0.0, -m.desc.gravity));
 
   m.nb = m.desc.floating_base ? 6 : 0;

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "overstep/cli/command.hpp"
+#include "overstep/cli/lcm_url.hpp"
 #include "overstep/core/error.hpp"
 #include "overstep/msgs/convert.hpp"
 #include "overstep/plan_reference_t.hpp"
@@ -95,9 +96,9 @@ class ReplayProcess {
   ReplayProcess(const ReplayCliOptions& o, Clock clock, const runtime::PlanTrack& track,
                 const stabilizer::Params& params, const runtime::ReplayOptions& ro)
       : o_(o), clock_(clock), track_(track), replay_(track, params, ro), lcm_(o.lcm_url) {
-    if (!lcm_.good()) throw InputError("cannot open LCM at '" + o.lcm_url + "'");
+    cli::lcmOpened(lcm_.good(), o.lcm_url, lcm_said_);
     state_.resize(track.joints());
-    auto* s = lcm_.subscribe("OVERSTEP_STATE", &ReplayProcess::onState, this);
+    auto* s = lcm_.subscribe("OVERSTEP_STATE", &ReplayProcess::onStateBytes, this);
     s->setQueueCapacity(1000);
     lcm_.subscribe("OVERSTEP_SIM_STATUS", &ReplayProcess::onSimStatus, this);
     lcm_.subscribe("OVERSTEP_REPLAY_CONTROL", &ReplayProcess::onControl, this);
@@ -275,6 +276,22 @@ class ReplayProcess {
     if (!fresh_) return nullptr;
     fresh_ = false;
     return &state_;
+  }
+
+  /// Decoded here, not by liblcm's typed subscription: its generated decoder sizes the joint
+  /// arrays from the message before checking the bytes (2^31 - 1 joints in a short message asked
+  /// for 48 GB). An undecodable state is counted with the bad ones and ignored: without a valid
+  /// state the watchdog holds.
+  void onStateBytes(const lcm::ReceiveBuffer* rb, const std::string& channel) {
+    std::string why;
+    if (!msgs::decodeChecked(rb->data, static_cast<int>(rb->data_size), state_msg_, &why)) {
+      ++bad_states_;
+      if (bad_states_ <= 3)
+        std::fprintf(stderr, "replay: undecodable robot state (%u bytes): %s\n", rb->data_size,
+                     why.c_str());
+      return;
+    }
+    onState(rb, channel, &state_msg_);
   }
 
   void onState(const lcm::ReceiveBuffer*, const std::string&, const overstep::robot_state_t* m) {
@@ -468,6 +485,8 @@ class ReplayProcess {
   Clock clock_;
   const runtime::PlanTrack& track_;
   runtime::Replay replay_;
+  overstep::robot_state_t state_msg_;  // the last state received, decoded (onStateBytes)
+  core::StderrCapture lcm_said_;       // what liblcm prints while lcm_ opens (into the error line)
   lcm::LCM lcm_;
   double period_ = 0.005;
   core::RobotState state_;
@@ -502,6 +521,7 @@ int runReplay(const ReplayCliOptions& o) {
   if (!(o.linger >= 0.0)) throw InputError("--linger: expected >= 0 s");
   if (!(o.state_timeout > 0.0)) throw InputError("--state-timeout: expected > 0 s");
   if (o.watchdog < 1) throw InputError("--watchdog: expected >= 1 period");
+  cli::checkLcmUrl(o.lcm_url);
   // Everything is validated before anything is sent: the plan, the model, the parameters.
   const core::Plan plan = core::loadPlan(o.plan);
   robots::WholeBodyModel model = robots::WholeBodyModel::fromFile(o.robot);

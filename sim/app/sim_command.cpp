@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "overstep/cli/command.hpp"
+#include "overstep/cli/lcm_url.hpp"
 #include "overstep/core/error.hpp"
 #include "overstep/core/obstacle.hpp"
 #include "overstep/msgs/convert.hpp"
@@ -54,8 +55,8 @@ class SimProcess {
         lcm_(o.lcm_url),
         joints_(model.actuatedCount()),
         model_desc_(model.description()) {
-    if (!lcm_.good()) throw InputError("cannot open LCM at '" + o.lcm_url + "'");
-    auto* sub = lcm_.subscribe("OVERSTEP_COMMAND", &SimProcess::onCommand, this);
+    cli::lcmOpened(lcm_.good(), o.lcm_url, lcm_said_);
+    auto* sub = lcm_.subscribe("OVERSTEP_COMMAND", &SimProcess::onCommandBytes, this);
     sub->setQueueCapacity(1000);  // drain everything; the newest valid command wins
     steps_per_period_ = static_cast<int>(std::lround(1.0 / (o.rate * 0.001)));
     sim_.settle();  // start settled in half-sitting
@@ -152,6 +153,18 @@ class SimProcess {
   }
 
  private:
+  /// Decoded here, not by liblcm's typed subscription: its generated decoder sizes the joint
+  /// arrays from the message before checking the bytes (a 50-byte command declaring 2^31 - 1
+  /// joints asked for 48 GB). An undecodable command is rejected and counted like a bad one.
+  void onCommandBytes(const lcm::ReceiveBuffer* rb, const std::string& channel) {
+    std::string why;
+    if (!msgs::decodeChecked(rb->data, static_cast<int>(rb->data_size), cmd_msg_, &why)) {
+      reject("command of " + std::to_string(rb->data_size) + " bytes: " + why);
+      return;
+    }
+    onCommand(rb, channel, &cmd_msg_);
+  }
+
   void onCommand(const lcm::ReceiveBuffer*, const std::string&,
                  const overstep::robot_command_t* msg) {
     std::string why;
@@ -246,8 +259,10 @@ class SimProcess {
   }
 
   SimCliOptions o_;
+  overstep::robot_command_t cmd_msg_;  // the last command received, decoded (onCommandBytes)
   sim::Simulator sim_;
   sim::SensorNoise noise_;
+  core::StderrCapture lcm_said_;  // what liblcm prints while lcm_ opens (into the error line)
   lcm::LCM lcm_;
   int joints_;
   int steps_per_period_ = 5;
@@ -268,6 +283,7 @@ int runSim(const SimCliOptions& o) {
   if (!(o.noise >= 0.0 && std::isfinite(o.noise))) throw InputError("--noise: expected >= 0");
   if (!(o.hold_timeout > 0.0)) throw InputError("--hold-timeout: expected > 0 s");
   if (!(o.duration >= 0.0)) throw InputError("--duration: expected >= 0 s");
+  cli::checkLcmUrl(o.lcm_url);
   SimCliOptions checked = o;
   checked.obstacle.shape = core::parseObstacleShape(o.obstacle_shape);
   if (!o.no_obstacle) core::validate(checked.obstacle);

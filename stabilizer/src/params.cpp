@@ -73,8 +73,9 @@ std::string validate(const Params& p) {
            fmt(p.mass);
   for (const auto& s : p.sole)
     if (!(s.x_min < s.x_max && s.y_min < s.y_max && s.x_min <= 0.0 && s.x_max >= 0.0 &&
-          s.y_min <= 0.0 && s.y_max >= 0.0))
-      return "stabilizer sole: expected a rectangle around the sole origin";
+          s.y_min <= 0.0 && s.y_max >= 0.0 && s.x_min > -1.0 && s.x_max < 1.0 && s.y_min > -1.0 &&
+          s.y_max < 1.0))  // finite: an infinite sole passed (issue 20)
+      return "stabilizer sole: expected a rectangle around the sole origin, within 1 m";
   return {};
 }
 

@@ -12,6 +12,7 @@
 #include "overstep/core/plan.hpp"
 #include "overstep/monitor/lcm_log.hpp"
 #include "overstep/monitor/messages.hpp"
+#include "overstep/monitor/plan_match.hpp"
 #include "overstep/monitor/report.hpp"
 #include "overstep/msgs/convert.hpp"
 #include "overstep/robots/whole_body_model.hpp"
@@ -31,7 +32,11 @@ struct IdentifyCliOptions {
 /// published in the same tick carries the same utime), and the first later state that reports
 /// having received it (last_command_seq). Paired after reading, so the order in which the logger
 /// received the runtime's and the simulator's messages does not matter.
-sysid::Dataset loadDataset(const std::string& path, int joints, double rate, double duration) {
+/// Every message is checked against the plan first (its joint count, and each plan reference's
+/// duration, time and phase): a log of another plan is refused instead of being read against it.
+sysid::Dataset loadDataset(const std::string& path, int joints, const core::Plan& plan,
+                           const std::string& plan_path) {
+  const double rate = plan.rate, duration = plan.duration();
   monitor::LogReader reader(path);
   monitor::LogEvent ev;
   monitor::AnyMessage msg;
@@ -46,13 +51,16 @@ sysid::Dataset loadDataset(const std::string& path, int joints, double rate, dou
   while (reader.next(ev)) {
     if (monitor::decode(ev.data, ev.size, msg) != monitor::DecodeStatus::Ok) continue;
     if (auto* s = std::get_if<overstep::robot_state_t>(&msg)) {
+      monitor::checkJointCount(s->num_joints, joints, ev.channel, path, plan_path);
       core::RobotState st;
       if (msgs::fromLcm(*s, joints, st, &why)) states.push_back(st);
     } else if (auto* c = std::get_if<overstep::robot_command_t>(&msg)) {
+      monitor::checkJointCount(c->num_joints, joints, ev.channel, path, plan_path);
       core::RobotCommand cmd;
       if (!states.empty() && msgs::fromLcm(*c, joints, cmd, &why))
         cmds.push_back({cmd, static_cast<int>(states.size()) - 1});
     } else if (auto* p = std::get_if<overstep::plan_reference_t>(&msg)) {
+      monitor::checkPlanReference(*p, plan, path, plan_path);
       ref_time[p->utime] = p->plan_time;
     }
   }
@@ -87,7 +95,7 @@ int runIdentify(const IdentifyCliOptions& o) {
   const robots::WholeBodyModel model = robots::WholeBodyModel::fromFile(o.robot);
   if (plan.robot_hash != model.description().hashHex())
     throw InputError(o.plan + ": planned for another robot (hash " + plan.robot_hash + ")");
-  const sysid::Dataset data = loadDataset(o.log, model.actuatedCount(), plan.rate, plan.duration());
+  const sysid::Dataset data = loadDataset(o.log, model.actuatedCount(), plan, o.plan);
   if (data.size() < 2)
     throw InputError(o.log + ": no executed tick of this plan in the log (another plan's run?)");
   sysid::IdentifyOptions io;

@@ -1,8 +1,10 @@
 // The `overstep` front end as a user runs it: exit codes, one-line errors, JSON output.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "run_cli.hpp"
 #include "test_util.hpp"
@@ -146,6 +148,112 @@ TEST(Cli, ExportJsonSurvivesAChannelNameThatIsNotUtf8) {
   const nlohmann::json j = nlohmann::json::parse(r.out, nullptr, false);
   ASSERT_FALSE(j.is_discarded()) << r.out;
   EXPECT_EQ(j["skipped"].size(), 1u) << r.out;
+}
+
+// Issue 20: `--lcm-url tcpq://...` ended sim, replay and monitor in liblcm's fd_set assertion
+// (SIGABRT), and a malformed URL in demo was an internal error. Every command that opens a bus
+// checks the URL first: one line, exit 2, the URL named.
+TEST(Cli, LcmUrlsAreCheckedBeforeLiblcmSeesThem) {
+  test::TempDir dir;
+  const std::vector<std::pair<std::string, std::string>> urls = {
+      {"tcpq://127.0.0.1:7700", "provider 'tcpq' is not supported"},
+      {"file:///tmp/x.lcmlog", "provider 'file' is not supported"},
+      {"239.255.76.67:7667", "expected udpm://"},
+      {"udpm://239.255.76.67:99999", "port '99999'"},
+      {"udpm://239.255.76.67:", "port ''"},
+      {"udpm://10.1.2.3:7667", "group '10.1.2.3': expected a multicast address"},
+      {"udpm://300.1.1.1:7667", "group '300.1.1.1': expected an IPv4 address"},
+      {"udpm://239.255.76.67:7667?ttl=-1", "ttl '-1'"},
+      {"udpm://239.255.76.67:7667?tll=0", "unknown option 'tll'"},
+      {"memq://x", "memq:// takes no"},
+  };
+  const std::vector<std::string> commands = {"sim --lockstep --duration 1 --lcm-url ",
+                                             "replay " + dir.file("missing.json") + " --lcm-url ",
+                                             "monitor --once --duration 0.1 --lcm-url ",
+                                             "demo --no-report --lcm-url ", "spy --lcm-url "};
+  for (const auto& cmd : commands) {
+    for (const auto& [url, why] : urls) {
+      SCOPED_TRACE(cmd + url);
+      const RunResult r = run(cmd + "'" + url + "'");
+      expectOneLineError(r, 2, "--lcm-url '" + url + "': " + why);
+    }
+  }
+  // demo runs its processes on one bus: memq:// (one process) is refused there.
+  expectOneLineError(run("demo --no-report --lcm-url memq://"), 2, "expected udpm://");
+  // The default URL from the environment is checked too, and named.
+  ::setenv("LCM_DEFAULT_URL", "tcpq://127.0.0.1:7700", 1);
+  const RunResult env = run("monitor --once --duration 0.1");
+  ::unsetenv("LCM_DEFAULT_URL");
+  expectOneLineError(env, 2, "LCM_DEFAULT_URL 'tcpq://127.0.0.1:7700'");
+  // A well-formed URL passes: memq:// (in-process) makes a live monitor that sees nothing.
+  const RunResult ok = run("monitor --once --duration 0.1 --json --lcm-url memq://");
+  EXPECT_EQ(ok.code, 0) << ok.err;
+}
+
+// What liblcm prints when it cannot open a bus (here: no network at all, a fresh network
+// namespace without even `lo` up) is in the one-line error instead of 14 lines of its own.
+TEST(Cli, LiblcmsMessagesAreInTheOneLineError) {
+  if (std::system("unshare -n true 2>/dev/null") != 0) GTEST_SKIP() << "needs unshare -n (root)";
+  test::TempDir dir;
+  const std::string cmd =
+      "unshare -n " + std::string(OVERSTEP_BIN) +
+      " monitor --once --duration 0.2 --lcm-url 'udpm://239.255.76.67:7667?ttl=0'"
+      " 2>" +
+      dir.file("err") + " >/dev/null";
+  const int status = std::system(cmd.c_str());
+  RunResult r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.err = test::slurp(dir.file("err"));
+  expectOneLineError(r, 2, "cannot open LCM at 'udpm://239.255.76.67:7667?ttl=0': ");
+  EXPECT_NE(r.err.find("multicast route"), std::string::npos) << r.err;
+}
+
+// Issue 20: a URDF nested 100,000 deep overflowed TinyXML's stack (SIGSEGV), 1e308 in a URDF or
+// a robot YAML reached DART's assertions, and urdfdom printed lines of its own beside our error.
+TEST(Cli, RobotFilesAreBoundedBeforeUrdfdomAndDartSeeThem) {
+  test::TempDir dir;
+  const std::string urdf = test::slurp(test::hrp2Urdf()), yaml = test::slurp(test::hrp2Yaml());
+  auto modelWith = [&](const std::string& u, const std::string& y) {
+    test::writeText(dir.path() / "hrp2.urdf", u);
+    test::writeText(dir.path() / "hrp2.yaml", y);
+    return run("model --robot " + dir.file("hrp2.yaml"));
+  };
+  std::string deep;
+  for (int i = 0; i < 100000; ++i) deep += "<a>";
+  for (int i = 0; i < 100000; ++i) deep += "</a>";
+  const RunResult nested = modelWith(test::replaceOnce(urdf, "</robot>", deep + "</robot>"), yaml);
+  expectOneLineError(nested, 2, "hrp2.urdf: elements nested more than 64 deep");
+  EXPECT_LT(nested.seconds, 10.0);
+  // Comments, quoted attributes and self-closing elements do not count as nesting.
+  std::string flat;
+  for (int i = 0; i < 1000; ++i) flat += "<!-- <a> --><b c='x>y'/>";
+  EXPECT_EQ(modelWith(test::replaceOnce(urdf, "</robot>", flat + "</robot>"), yaml).code, 0);
+  expectOneLineError(
+      modelWith(test::replaceOnce(urdf, "<mass value=\"14.5\"/>", "<mass value=\"1e308\"/>"), yaml),
+      2, "link 'BODY' mass: expected a finite value of magnitude <= 10000, got 1e+308");
+  expectOneLineError(modelWith(test::replaceOnce(urdf, "<origin xyz=\"-0.01 0 0.12\"",
+                                                 "<origin xyz=\"-0.01 1e308 0.12\""),
+                               yaml),
+                     2, "link 'BODY' inertial origin xyz");
+  expectOneLineError(modelWith(test::replaceOnce(urdf, "<box size=\"0.2 0.24 0.22\"/>",
+                                                 "<box size=\"0.2 1e300 0.22\"/>"),
+                               yaml),
+                     2, "link 'BODY' visual box size");
+  // What urdfdom prints about a URDF it cannot parse is in the one line.
+  const RunResult broken = modelWith(test::replaceOnce(urdf, "</robot>", "<link"), yaml);
+  expectOneLineError(broken, 2, "hrp2.urdf: malformed URDF (urdfdom: ");
+  EXPECT_EQ(broken.err.find("could not parse it"), std::string::npos) << "urdfdom said nothing?";
+  // 1e308 in the YAML: beyond the magnitude any of our YAML numbers may have.
+  expectOneLineError(modelWith(urdf, test::replaceOnce(yaml, "stiffness: 502", "stiffness: 1e308")),
+                     2, "stiffness: expected a magnitude of at most 1e+09, got 1e+308");
+}
+
+// Issue 20: `report --frames 100000` drew without end.
+TEST(Cli, ReportFramesAreBounded) {
+  test::TempDir dir;
+  for (const char* n : {"100000", "65", "1", "0", "-3"})
+    expectOneLineError(run("report " + dir.path().string() + " --frames " + n), 2,
+                       std::string("--frames: expected 2 to 64, got ") + n);
 }
 
 // Issue 20: a floating-base robot without `feet:` loaded, then `plan` and `check` crashed.

@@ -215,6 +215,26 @@ TEST_F(MonitorCli, LiveMonitorSeesTheSimulatorAtItsRate) {
   test::waitOverstep(sim, 10.0);
 }
 
+// Issue 20: `identify` and `report` took the plan of another run (exit 0, this log read against
+// it). The recorded run replayed a 1.5 s standing plan; a 3 s one is refused by both, naming both.
+TEST_F(MonitorCli, APlanThatDoesNotMatchTheLogIsRefused) {
+  const std::string other = dir_->file("stand3.json");
+  const auto p = test::runOverstep("plan --stand 3 --out " + other);
+  ASSERT_EQ(p.code, 0) << p.err;
+  const std::string why = "OVERSTEP_PLAN_REF is of a plan of 1.5 s, the plan lasts 3 s (" + other;
+  const auto rep = test::runOverstep("report " + run().string() + " --plan " + other + " --out " +
+                                     dir_->file("report_other"));
+  EXPECT_EQ(rep.code, 2) << rep.err;
+  EXPECT_NE(rep.err.find("error: " + log() + ": " + why), std::string::npos) << rep.err;
+  const auto id = test::runOverstep("identify " + log() + " --plan " + other);
+  EXPECT_EQ(id.code, 2) << id.err;
+  EXPECT_NE(id.err.find("error: " + log() + ": " + why), std::string::npos) << id.err;
+  EXPECT_EQ(std::count(id.err.begin(), id.err.end(), '\n'), 1) << id.err;
+  // The plan that was replayed passes the same checks.
+  const auto same = test::runOverstep("identify " + log() + " --plan " + dir_->file("stand.json"));
+  EXPECT_EQ(same.err.find("OVERSTEP_PLAN_REF"), std::string::npos) << same.err;
+}
+
 TEST_F(MonitorCli, BadInputIsExitTwoWithOneLine) {
   for (const std::string& args : std::vector<std::string>{
            "monitor /nonexistent.lcmlog --once",

@@ -2,6 +2,8 @@
 // small obstacle planned end to end and re-verified independently.
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "run_cli.hpp"
@@ -28,10 +30,13 @@ TEST(PlanCli, BadInputIsExitTwoWithOneLine) {
        {"plan --obstacle-height -0.2", "plan --obstacle-height tall", "plan --obstacle-width 0",
         "plan --obstacle-shape sphere", "plan --margin -1", "plan --robot /nonexistent.yaml",
         "plan --threads -2", "plan --excite 1", "plan --excite 5 --amplitude 3",
-        "plan --excite 5 --stand 5", "plan --resample"}) {
+        "plan --excite 5 --stand 5", "plan --resample",
+        // Issue 20: 0 was taken as "not given" and started a full solve.
+        "plan --stand 0", "plan --excite 0", "plan --stand 0 --excite 0", "plan --stand -1"}) {
     const RunResult r = run(args + out);
     EXPECT_EQ(r.code, 2) << args << ": " << r.err;
     EXPECT_NE(lastLine(r.err).find("error"), std::string::npos) << args << ": " << r.err;
+    EXPECT_LT(r.seconds, 60.0) << args << ": refused at once, not after a solve";
   }
   test::writeText(dir.path() / "bad.yaml", "cop_box: [1\n");
   const RunResult r = run("plan --config " + dir.file("bad.yaml") + out);
@@ -59,6 +64,41 @@ TEST(CheckCli, BadPlanFilesAreExitTwo) {
   const RunResult r = run("check " + dir.file("garbage.json"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("format"), std::string::npos) << r.err;
+}
+
+// Issue 20: SIGTERM (a scheduler's stop, `timeout`) killed the planner and lost the best attempt
+// that Ctrl-C keeps. Both signals, sent once the solve has begun: exit 130, the best attempt in
+// <out>.failed.json marked "interrupted", nothing at <out>.
+TEST(PlanCli, SigtermKeepsTheBestAttemptLikeSigint) {
+  for (const int sig : {SIGTERM, SIGINT}) {
+    SCOPED_TRACE(sig == SIGTERM ? "SIGTERM" : "SIGINT");
+    test::TempDir dir;
+    test::ProcessGuard guard;
+    const pid_t pid = guard.add(
+        test::spawnOverstep("plan --obstacle-height 0.05 --threads 1 --out " + dir.file("p.json"),
+                            dir.file("out"), dir.file("err")));
+    // The first line of the iteration table's preamble comes after the handlers are installed.
+    const auto t0 = std::chrono::steady_clock::now();
+    while (test::slurp(dir.file("out")).find("variables") == std::string::npos) {
+      ASSERT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 120.0)
+          << test::slurp(dir.file("err"));
+      ASSERT_EQ(kill(pid, 0), 0) << "plan ended before the solve: " << test::slurp(dir.file("err"));
+      usleep(20000);
+    }
+    ASSERT_EQ(kill(pid, sig), 0);
+    const int code = test::waitOverstep(pid, 120.0);
+    const std::string err = test::slurp(dir.file("err"));
+    ASSERT_EQ(code, 130) << err;
+    EXPECT_NE(
+        lastLine(err).find("interrupted; best attempt written to " + dir.file("p.failed.json")),
+        std::string::npos)
+        << err;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("p.json")));
+    const auto plan = nlohmann::json::parse(test::slurp(dir.file("p.failed.json")));
+    const auto& summary = plan.at("summary");
+    EXPECT_EQ(summary.at("status"), "interrupted");
+    EXPECT_FALSE(summary.at("x").empty());
+  }
 }
 
 // Acceptance scenario of the planner issue and the pipeline end to end: a 5 cm bar with the

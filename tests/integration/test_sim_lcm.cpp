@@ -10,6 +10,7 @@
 #include <future>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "overstep/robot_command_t.hpp"
 #include "overstep/robot_state_t.hpp"
@@ -93,6 +94,20 @@ SimRun drive(unsigned seed) {
         if (tick == 50) bad.q_ref[kJoint] += 0.5;  // would be visible if applied
         bus.publish("OVERSTEP_COMMAND", &bad);
       }
+      if (tick == 80 || tick == 90) {
+        // Issue 20: bytes that do not decode. 80: the command cut to 50 bytes with 2^31 - 1
+        // joints declared (liblcm's typed decoding asked for 48 GB); 90: cut in its arrays.
+        std::vector<std::uint8_t> raw(static_cast<std::size_t>(cmd.getEncodedSize()));
+        cmd.encode(raw.data(), 0, static_cast<int>(raw.size()));
+        if (tick == 80) {
+          raw[24] = 0x7f;
+          raw[25] = raw[26] = raw[27] = 0xff;
+          raw.resize(50);
+        } else {
+          raw.resize(raw.size() / 2);
+        }
+        bus.publish("OVERSTEP_COMMAND", raw.data(), static_cast<unsigned>(raw.size()));
+      }
       cmd.seq = ++seq;
       bus.publish("OVERSTEP_COMMAND", &cmd);
       run.last_sent = cmd.seq;
@@ -132,8 +147,9 @@ TEST_F(SimLcm, LockstepClientMovesAJointAndReadsItBack) {
     EXPECT_NEAR(last.q[j], first.q[j], 2e-3) << "joint " << j;
   }
   EXPECT_EQ(last.last_command_seq, run.last_sent);
-  EXPECT_EQ(run.status.rejected_commands, 3) << "NaN, wrong joint count, stale seq";
-  EXPECT_EQ(run.summary["rejected_commands"], 3);
+  EXPECT_EQ(run.status.rejected_commands, 5)
+      << "NaN, wrong joint count, stale seq, 2^31 - 1 joints in 50 bytes, cut";
+  EXPECT_EQ(run.summary["rejected_commands"], 5);
   EXPECT_EQ(run.summary["accepted_commands"], run.last_sent);
   EXPECT_FALSE(run.status.fell);
   EXPECT_FALSE(run.status.obstacle_contact) << "standing clear of the default bar";

@@ -1,14 +1,21 @@
 // core: robot description loading/validation, the wrench/ZMP helpers and plan sample lookup.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdio>
+#include <iostream>
 #include <random>
 #include <vector>
 
 #include "overstep/core/error.hpp"
+#include "overstep/core/json_depth.hpp"
 #include "overstep/core/plan.hpp"
 #include "overstep/core/robot_description.hpp"
+#include "overstep/core/stderr_capture.hpp"
 #include "overstep/core/wrench.hpp"
+#include "overstep/core/yaml_reader.hpp"
 #include "test_util.hpp"
 
 namespace overstep {
@@ -115,7 +122,9 @@ TEST(RobotDescription, RejectsANonPositiveAccelerationLimit) {
 
 TEST(RobotDescription, RejectsAbsurdGravity) {
   expectYamlError("gravity: 9.81", "gravity: 1e308",
-                  "gravity: expected 0 < gravity <= 100 m/s^2, got 1e+308");
+                  "gravity: expected a magnitude of at most 1e+09, got 1e+308");
+  expectYamlError("gravity: 9.81", "gravity: 1e5",
+                  "gravity: expected 0 < gravity <= 100 m/s^2, got 100000");
   expectYamlError("gravity: 9.81", "gravity: .nan", "gravity: expected a finite number, got nan");
 }
 
@@ -259,6 +268,87 @@ TEST(Plan, SampleAtFindsEverySampleAcrossPhaseSwitches) {
   // At a switch without a phase: the later sample (the new phase).
   EXPECT_EQ(p.phase(p.sampleAt(p.t(40))), 1);
   EXPECT_EQ(Plan{}.sampleAt(0.0), -1);
+}
+
+// The bracket scan every JSON reader asks before parsing (nlohmann-json recurses).
+TEST(Json, DepthCountsBracketsOutsideStringsAndStopsPastTheCap) {
+  EXPECT_EQ(core::jsonDepth("1", 8), 0);
+  EXPECT_EQ(core::jsonDepth("{\"a\": [1, {\"b\": []}]}", 8), 4);
+  EXPECT_EQ(core::jsonDepth("[\"[[[[\", \"\\\"[[[\"]", 8),
+            1);  // brackets in strings, an escaped quote
+  const std::string deep = std::string(60000, '[') + std::string(60000, ']');
+  EXPECT_EQ(core::jsonDepth(deep, 16), 17);  // stopped just past the cap
+  EXPECT_EQ(core::jsonDepth(deep, 100000), 60000);
+}
+
+// Every number of our YAML files: finite and at most 1e9 in magnitude (1e308 reached DART).
+TEST(Yaml, NumbersBeyondTheMagnitudeCapAreRefusedWithTheirKey) {
+  const core::YamlReader r("f.yaml");
+  EXPECT_EQ(r.value(YAML::Load("1e9"), "k"), 1e9);
+  EXPECT_EQ(r.value(YAML::Load("-2.5"), "k"), -2.5);
+  for (const char* v : {"1e308", "-1e10", ".inf", ".nan"}) {
+    try {
+      r.value(YAML::Load(v), "a.b");
+      ADD_FAILURE() << v << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("f.yaml: a.b: expected a ", 0), 0u) << e.what();
+    }
+  }
+}
+
+// Found by tests/fuzz/fuzz_robot: a list, map or null as a key threw yaml-cpp's
+// TypedBadConversion out of the readers ("internal error").
+TEST(Yaml, KeysThatAreNotPlainScalarsAreRefused) {
+  for (const char* text : {"{[a]: 1}", "a:\n  {b: 1}: 2\n", "~: 1", "- {? [x, y]: 1}"}) {
+    try {
+      core::YamlReader::parse(text, "f.yaml");
+      ADD_FAILURE() << text << " accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("expected a plain key"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_NO_THROW(core::YamlReader::parse("a: {b: 1, \"c d\": [1, 2]}\n", "f.yaml"));
+}
+
+// Issue 20: a folder given as a file was "no such file", and writing onto one said "(Success)".
+TEST(Files, AFolderIsNamedAsSuchWhenReadOrWritten) {
+  TempDir dir;
+  auto message = [](auto fn) {
+    try {
+      fn();
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message([&] { core::readFile(dir.path().string()); }),
+            dir.path().string() + ": is a folder, not a file");
+  EXPECT_EQ(message([&] { core::readFile(dir.file("missing")); }),
+            dir.file("missing") + ": no such file");
+  std::filesystem::create_directory(dir.path() / "out.json");
+  EXPECT_EQ(message([&] { core::writeFileAtomic(dir.file("out.json"), "{}"); }),
+            dir.file("out.json") + ": is a folder (give a file name)");
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()),
+                          std::filesystem::directory_iterator()),
+            1)
+      << "a temporary file was left";
+}
+
+// What a library prints on stderr while captured comes back as one line, and stderr is
+// restored afterwards.
+TEST(StderrCapture, ReturnsWhatWasPrintedAsOneLine) {
+  std::string text;
+  {
+    core::StderrCapture c;
+    std::fprintf(stderr, "Error: first line\n  second\t\n\n");
+    std::cerr << "third" << std::endl;
+    EXPECT_EQ(::write(2, "fourth\n", 7), 7);
+    text = c.text();
+    EXPECT_EQ(c.text(), text);  // idempotent
+  }
+  EXPECT_EQ(text, "Error: first line; second; third; fourth");
+  core::StderrCapture nothing;
+  EXPECT_EQ(nothing.text(), "");
 }
 
 }  // namespace

@@ -2,6 +2,9 @@
 #include <gtest/gtest.h>
 #include <sys/resource.h>
 
+#include <algorithm>
+#include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +16,7 @@
 #include "overstep/monitor/lcm_log.hpp"
 #include "overstep/monitor/messages.hpp"
 #include "overstep/monitor/monitor.hpp"
+#include "overstep/monitor/plan_match.hpp"
 #include "test_util.hpp"
 
 namespace overstep {
@@ -328,6 +332,216 @@ TEST(MonitorExport, ANegativeJointCountIsABreakAtItsEvent) {
   EXPECT_EQ(sum.break_offset, at[1]);
   EXPECT_NE(sum.break_reason.find("does not decode"), std::string::npos) << sum.break_reason;
   EXPECT_EQ(sum.rows.at("OVERSTEP_STATE"), 1);
+}
+
+/// Every path under `root` (recursively), relative to it, sorted.
+std::vector<std::string> treeOf(const std::string& root) {
+  std::vector<std::string> out;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(root))
+    out.push_back(std::filesystem::relative(e.path(), root).string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Issue 20: an export of a damaged log into a folder holding a complete export replaced the
+// complete CSVs with partial ones and left the previous export's other files and `.csv.tmp`
+// files beside them. Now the folder is replaced as a whole, by a complete log's export only.
+TEST(MonitorExport, APreviousExportIsReplacedByACompleteOneOnly) {
+  TempDir dir;
+  const SyntheticLog log = test::writeSyntheticLog(dir.file("a.lcmlog"), 0.5, 21);
+  const std::string csv = dir.file("csv");
+  auto first = monitor::exportCsv(dir.file("a.lcmlog"), csv, {});
+  ASSERT_TRUE(first.written);
+  EXPECT_EQ(first.files.at("OVERSTEP_STATE"), csv + "/OVERSTEP_STATE.csv");
+  // A file of an earlier export of another log, and an older version's temporary file: a
+  // complete export replaces the folder, so neither survives it.
+  test::writeText(dir.path() / "csv" / "OLD_CHANNEL.csv", "log_time [us],type\n");
+  test::writeText(dir.path() / "csv" / "OVERSTEP_STATE.csv.tmp", "partial");
+  first = monitor::exportCsv(dir.file("a.lcmlog"), csv, {});
+  ASSERT_TRUE(first.written);
+  const std::vector<std::string> complete = treeOf(csv);
+  EXPECT_EQ(complete.size(), first.files.size());
+  for (const auto& f : complete) EXPECT_EQ(f.find("OLD"), std::string::npos) << f;
+  for (const auto& f : complete) EXPECT_EQ(f.find(".tmp"), std::string::npos) << f;
+  const std::string states = test::slurp(csv + "/OVERSTEP_STATE.csv");
+
+  // The same log cut inside an event: its part before the break does not replace the export.
+  std::filesystem::copy_file(dir.file("a.lcmlog"), dir.file("cut.lcmlog"));
+  std::filesystem::resize_file(
+      dir.file("cut.lcmlog"),
+      static_cast<std::uintmax_t>(log.events[log.events.size() / 2].offset + 30));
+  const auto cut = monitor::exportCsv(dir.file("cut.lcmlog"), csv, {});
+  EXPECT_GE(cut.break_offset, 0);
+  EXPECT_FALSE(cut.written);
+  EXPECT_TRUE(cut.files.empty());
+  EXPECT_EQ(treeOf(csv), complete);
+  EXPECT_EQ(test::slurp(csv + "/OVERSTEP_STATE.csv"), states);
+  // Nothing is left beside the folder either (the temporary sibling is gone).
+  EXPECT_EQ(treeOf(dir.path().string()).size(), complete.size() + 3u)  // a, cut, csv/
+      << ::testing::PrintToString(treeOf(dir.path().string()));
+  // Into a new folder (or an empty one) the part before the break is written.
+  std::filesystem::create_directory(dir.file("empty"));
+  for (const char* d : {"fresh", "empty"}) {
+    const auto part = monitor::exportCsv(dir.file("cut.lcmlog"), dir.file(d), {});
+    EXPECT_TRUE(part.written) << d;
+    EXPECT_LT(part.rows.at("OVERSTEP_STATE"), first.rows.at("OVERSTEP_STATE")) << d;
+    EXPECT_EQ(treeOf(dir.file(d)).size(), part.files.size()) << d;
+  }
+}
+
+TEST(MonitorExport, AFolderHoldingOtherFilesIsRefusedUntouched) {
+  TempDir dir;
+  test::writeSyntheticLog(dir.file("a.lcmlog"), 0.2, 5);
+  std::filesystem::create_directory(dir.path() / "out");
+  test::writeText(dir.path() / "out" / "notes.txt", "mine");
+  try {
+    monitor::exportCsv(dir.file("a.lcmlog"), dir.file("out"), {});
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("notes.txt"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(treeOf(dir.file("out")), std::vector<std::string>{"notes.txt"});
+  EXPECT_EQ(treeOf(dir.path().string()).size(), 3u);  // a.lcmlog, out, out/notes.txt
+  test::writeText(dir.path() / "file", "x");
+  EXPECT_THROW(monitor::exportCsv(dir.file("a.lcmlog"), dir.file("file"), {}), InputError);
+  // The folder this process works in (or one holding it) is never replaced.
+  std::filesystem::create_directories(dir.path() / "cwd" / "inner");
+  const auto before = std::filesystem::current_path();
+  std::filesystem::current_path(dir.path() / "cwd" / "inner");
+  EXPECT_THROW(monitor::exportCsv(dir.file("a.lcmlog"), ".", {}), InputError);
+  EXPECT_THROW(monitor::exportCsv(dir.file("a.lcmlog"), "..", {}), InputError);
+  EXPECT_TRUE(monitor::exportCsv(dir.file("a.lcmlog"), "csv", {}).written);  // a subfolder is fine
+  std::filesystem::current_path(before);
+  EXPECT_TRUE(std::filesystem::is_directory(dir.path() / "cwd" / "inner" / "csv"));
+}
+
+TEST(MonitorExport, AnInterruptedExportLeavesNothing) {
+  TempDir dir;
+  test::writeSyntheticLog(dir.file("a.lcmlog"), 0.2, 5);
+  const std::atomic<bool> stop{true};
+  const auto sum = monitor::exportCsv(dir.file("a.lcmlog"), dir.file("csv"), {}, &stop);
+  EXPECT_TRUE(sum.interrupted);
+  EXPECT_FALSE(sum.written);
+  EXPECT_EQ(treeOf(dir.path().string()), std::vector<std::string>{"a.lcmlog"});
+}
+
+// Issue 20: "A B" and "A_B" (or any two names differing only in characters a file name cannot
+// hold) were written into one CSV, their rows interleaved.
+TEST(MonitorExport, ChannelNamesMapToFileNamesInjectively) {
+  EXPECT_EQ(monitor::channelFileName("OVERSTEP_STATE"), "OVERSTEP_STATE.csv");
+  EXPECT_EQ(monitor::channelFileName("A B"), "A%20B.csv");
+  EXPECT_EQ(monitor::channelFileName("A_B"), "A_B.csv");
+  EXPECT_EQ(monitor::channelFileName("A%20B"), "A%2520B.csv");
+  EXPECT_EQ(monitor::channelFileName(".."), "%2E..csv");
+  EXPECT_EQ(monitor::channelFileName("a/b"), "a%2Fb.csv");
+  const std::string long_a(900, 'x'), long_b = std::string(899, 'x') + "y";
+  const std::string fa = monitor::channelFileName(long_a), fb = monitor::channelFileName(long_b);
+  EXPECT_NE(fa, fb);
+  EXPECT_LE(fa.size(), 255u);
+  EXPECT_LE(fb.size(), 255u);
+  // Through a log: four channels whose '_' mapping was one file, each its own CSV with its row.
+  TempDir dir;
+  const std::string path = dir.file("a.lcmlog");
+  const std::vector<std::string> channels = {"S T", "S_T", "S/T", long_a, long_b};
+  {
+    lcm::LogFile file(path, "w");
+    for (const auto& ch : channels) {
+      auto data = test::encodeMsg(test::makeState(30));
+      lcm::LogEvent le{};
+      le.timestamp = 1;
+      le.channel = ch;
+      le.datalen = static_cast<int32_t>(data.size());
+      le.data = data.data();
+      file.writeEvent(&le);
+    }
+  }
+  const auto sum = monitor::exportCsv(path, dir.file("csv"), {});
+  ASSERT_TRUE(sum.written);
+  ASSERT_EQ(sum.files.size(), channels.size());
+  EXPECT_EQ(treeOf(dir.file("csv")).size(), channels.size());
+  for (const auto& ch : channels) {
+    EXPECT_EQ(sum.rows.at(ch), 1);
+    EXPECT_EQ(readCsv(sum.files.at(ch)).size(), 2u) << ch.substr(0, 10);
+  }
+}
+
+// Issue 20: `identify` and `report` read a log against any plan given to them (and the report
+// indexed the plan's phases with the log's phase index). A plan reference is checked first.
+TEST(MonitorPlanMatch, APlanReferenceOfAnotherPlanIsNamed) {
+  core::Plan plan;
+  plan.rate = 200.0;
+  plan.t = Eigen::VectorXd::LinSpaced(401, 0.0, 2.0);
+  plan.phases = {{"ds_start", 0.0, 1.0, true, true}, {"ss_right_swing", 1.0, 1.0, false, true}};
+  overstep::plan_reference_t ref{};
+  ref.plan_duration = 2.0;
+  ref.plan_time = 1.5;
+  ref.phase = 1;
+  ref.phase_name = "ss_right_swing";
+  EXPECT_EQ(monitor::planReferenceMismatch(ref, plan), "");
+  ref.plan_duration = 2.004;  // within a sample period (a re-sampled copy)
+  EXPECT_EQ(monitor::planReferenceMismatch(ref, plan), "");
+  auto with = [&](auto change) {
+    overstep::plan_reference_t r = ref;
+    change(r);
+    return monitor::planReferenceMismatch(r, plan);
+  };
+  EXPECT_NE(
+      with([](auto& r) { r.plan_duration = 5.26; }).find("of a plan of 5.26 s, the plan lasts 2 s"),
+      std::string::npos);
+  EXPECT_NE(with([](auto& r) { r.plan_duration = std::nan(""); }), "");
+  EXPECT_NE(with([](auto& r) { r.plan_time = 2.5; }).find("plan time 2.5 s"), std::string::npos);
+  EXPECT_NE(with([](auto& r) { r.plan_time = -0.1; }), "");
+  EXPECT_NE(with([](auto& r) { r.plan_time = std::nan(""); }), "");
+  EXPECT_NE(with([](auto& r) { r.phase = 2; }).find("phase 2, the plan has 2 phases"),
+            std::string::npos);
+  EXPECT_NE(with([](auto& r) { r.phase = -1; }), "");
+  EXPECT_NE(
+      with([](auto& r) { r.phase_name = "ds_mid"; }).find("'ds_mid', the plan 'ss_right_swing'"),
+      std::string::npos);
+  try {
+    monitor::checkJointCount(12, 30, "OVERSTEP_STATE", "a.lcmlog", "p.json");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()),
+              "a.lcmlog: OVERSTEP_STATE carries 12 joints, p.json and its robot have 30 (a run of "
+              "another robot?)");
+  }
+  EXPECT_NO_THROW(monitor::checkJointCount(30, 30, "OVERSTEP_STATE", "a.lcmlog", "p.json"));
+}
+
+// Found by tests/fuzz/fuzz_msgs: lcm-gen's decoder copies a string's declared length - 1 bytes
+// after checking only the upper bound: length 0 threw std::length_error ("internal error" in
+// export), -2^31 read 2 GB past the buffer (SIGSEGV). The length is checked first, in each type
+// with a string, at its offset (the intact message decodes, so the offset is the right one).
+template <class T>
+void expectStringLengthChecked(const T& m, const std::string& text, int at) {
+  const auto good = test::encodeMsg(m);
+  monitor::AnyMessage msg;
+  ASSERT_EQ(monitor::decode(good.data(), static_cast<int>(good.size()), msg),
+            monitor::DecodeStatus::Ok);
+  std::uint32_t stored = 0;
+  for (int i = 0; i < 4; ++i) stored = (stored << 8) | good[static_cast<std::size_t>(at + i)];
+  ASSERT_EQ(stored, text.size() + 1) << "the string's length is not at byte " << at;
+  for (const std::uint32_t len : {0u, 0x80000000u, 0xffffffffu, 0x7fffffffu, 100000u}) {
+    auto bad = good;
+    for (int i = 0; i < 4; ++i)
+      bad[static_cast<std::size_t>(at + i)] = static_cast<std::uint8_t>(len >> (24 - 8 * i));
+    EXPECT_EQ(monitor::decode(bad.data(), static_cast<int>(bad.size()), msg),
+              monitor::DecodeStatus::Malformed)
+        << "length " << len;
+  }
+}
+
+TEST(MonitorDecode, StringLengthsAreCheckedBeforeDecoding) {
+  overstep::runtime_status_t r = test::makeRuntimeStatus();
+  r.fault_reason = "watchdog";
+  expectStringLengthChecked(r, r.fault_reason, 25);
+  overstep::plan_reference_t p{};
+  p.phase_name = "ds_start";
+  expectStringLengthChecked(p, p.phase_name, 44);
+  overstep::stabilizer_status_t st{};
+  st.fault_reason = "";
+  expectStringLengthChecked(st, st.fault_reason, 37);
 }
 
 TEST(MonitorRates, MatchTheLogsTimestamps) {

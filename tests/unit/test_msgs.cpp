@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "msg_fixtures.hpp"
 #include "overstep/msgs/convert.hpp"
@@ -143,6 +145,46 @@ TEST(MsgsConvert, StateRoundTripAndValidation) {
   msgs::toLcm(s, m);
   m.ft_left[2] = std::numeric_limits<double>::infinity();
   EXPECT_FALSE(msgs::fromLcm(m, 30, back, &why));
+}
+
+// Issue 20: the simulator's commands and the runtime's states were decoded by liblcm's typed
+// subscriptions, whose generated decoder sizes the joint arrays before checking the bytes: a
+// 50-byte command declaring 2^31 - 1 joints asked for 48 GB, a negative count threw.
+template <class T>
+void expectCheckedDecoding(const T& good_msg, int joints_at) {
+  std::vector<std::uint8_t> good(static_cast<std::size_t>(good_msg.getEncodedSize()));
+  good_msg.encode(good.data(), 0, static_cast<int>(good.size()));
+  T out;
+  std::string why;
+  ASSERT_TRUE(overstep::msgs::decodeChecked(good.data(), static_cast<int>(good.size()), out, &why))
+      << why;
+  EXPECT_EQ(out.num_joints, good_msg.num_joints);
+  std::uint32_t stored = 0;
+  for (int i = 0; i < 4; ++i)
+    stored = (stored << 8) | good[static_cast<std::size_t>(joints_at + i)];
+  ASSERT_EQ(stored, static_cast<std::uint32_t>(good_msg.num_joints))
+      << "num_joints not at " << joints_at;
+  for (const std::uint32_t n : {0x7fffffffu, 0x80000000u, 0xffffffffu, 31u}) {
+    auto bad = good;
+    for (int i = 0; i < 4; ++i)
+      bad[static_cast<std::size_t>(joints_at + i)] = static_cast<std::uint8_t>(n >> (24 - 8 * i));
+    EXPECT_FALSE(overstep::msgs::decodeChecked(bad.data(), static_cast<int>(bad.size()), out, &why))
+        << "num_joints " << n;
+    // Cut to 50 bytes: the declared count cannot fit.
+    EXPECT_FALSE(overstep::msgs::decodeChecked(bad.data(), 50, out, &why)) << n;
+  }
+  for (const int cut : {0, 7, joints_at + 2, static_cast<int>(good.size()) - 1})
+    EXPECT_FALSE(overstep::msgs::decodeChecked(good.data(), cut, out, &why)) << "cut " << cut;
+  auto other = good;
+  other[0] ^= 0xff;  // another type's fingerprint
+  EXPECT_FALSE(
+      overstep::msgs::decodeChecked(other.data(), static_cast<int>(other.size()), out, &why));
+  EXPECT_NE(why.find("fingerprint"), std::string::npos) << why;
+}
+
+TEST(MsgsConvert, CommandsAndStatesAreDecodedWithTheirJointCountChecked) {
+  expectCheckedDecoding(overstep::test::makeCommand(30), 8 + 2 * 8);
+  expectCheckedDecoding(overstep::test::makeState(30), 8 + 3 * 8);
 }
 
 }  // namespace

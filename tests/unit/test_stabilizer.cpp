@@ -539,6 +539,57 @@ TEST(StabilizerParams, LoadsTheRobotSectionAndRefusesBadValues) {
   EXPECT_THROW(st::Stabilizer{p}, overstep::InputError);  // mass 0
 }
 
+// Issue 20: NaN gains must never pass the safety ranges (a range test written as v < min ||
+// v > max lets NaN through). Every row of the table, the poles, the mass and the soles, with NaN
+// and infinities; and `.nan` / `.inf` in a robot file are refused with the key named.
+TEST(StabilizerParams, NanAndInfiniteValuesFailTheSafetyRanges) {
+  st::Params good = st::loadParams(overstep::test::hrp2Yaml());
+  good.mass = 58.0;
+  ASSERT_EQ(st::validate(good), "");
+  const double bad_values[] = {std::nan(""), std::numeric_limits<double>::infinity(),
+                               -std::numeric_limits<double>::infinity()};
+  for (const double v : bad_values) {
+    for (const auto& spec : st::paramTable()) {
+      st::Params p = good;
+      p.*(spec.field) = v;
+      EXPECT_NE(st::validate(p).find(std::string("stabilizer.") + spec.key), std::string::npos)
+          << spec.key << " = " << v;
+    }
+    for (int i = 0; i < 3; ++i) {
+      st::Params p = good;
+      p.lipm_poles[static_cast<std::size_t>(i)] = v;
+      EXPECT_NE(st::validate(p), "") << "lipm_poles[" << i << "] = " << v;
+    }
+    st::Params m = good;
+    m.mass = v;
+    EXPECT_NE(st::validate(m), "") << "mass = " << v;
+    st::Params sole = good;
+    sole.sole[0].x_max = v;
+    EXPECT_NE(st::validate(sole), "") << "sole x_max = " << v;
+    st::Params configured = good;
+    configured.dcm_kp = v;
+    st::Stabilizer stab(good);
+    EXPECT_FALSE(stab.configure(configured)) << "configure() took dcm_kp = " << v;
+  }
+  overstep::test::TempDir dir;
+  overstep::test::writeText(dir.path() / "hrp2.urdf",
+                            overstep::test::slurp(overstep::test::hrp2Urdf()));
+  std::string text = overstep::test::slurp(overstep::test::hrp2Yaml());
+  const auto pos = text.find("\nstabilizer:");
+  ASSERT_NE(pos, std::string::npos);
+  text = text.substr(0, pos + 1);
+  for (const char* value : {".nan", ".inf", "-.inf", "1e999"}) {
+    overstep::test::writeText(dir.path() / "r.yaml",
+                              text + "stabilizer:\n  dcm_kp: " + std::string(value) + "\n");
+    try {
+      st::loadParams(dir.file("r.yaml"));
+      ADD_FAILURE() << value << " accepted";
+    } catch (const overstep::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("stabilizer.dcm_kp"), std::string::npos) << e.what();
+    }
+  }
+}
+
 // A model overlay (docs/model-overlay.md) has no stabilizer section: the gains stay those of the
 // robot file at the bottom of its chain (they had silently fallen back to the defaults, which
 // turned the robot's disabled force-difference control on after `overstep identify`).

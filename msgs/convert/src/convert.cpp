@@ -1,6 +1,8 @@
 #include "overstep/msgs/convert.hpp"
 
 #include <cmath>
+#include <cstdint>
+#include <exception>
 
 namespace overstep::msgs {
 namespace {
@@ -28,6 +30,31 @@ bool fail(std::string* why, const char* msg) {
   return false;
 }
 
+std::int64_t bigEndian(const unsigned char* b, int n) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < n; ++i) v = (v << 8) | b[i];
+  return static_cast<std::int64_t>(v);
+}
+
+/// `joints_at`: byte offset of num_joints (after the fingerprint and the int64 fields before it);
+/// both types carry three joint arrays of doubles.
+template <class T>
+bool decodeWithJoints(const void* data, int size, int joints_at, T& out, std::string* why) {
+  const auto* b = static_cast<const unsigned char*>(data);
+  if (data == nullptr || size < joints_at + 4) return fail(why, "message too short");
+  if (static_cast<std::uint64_t>(bigEndian(b, 8)) != static_cast<std::uint64_t>(T::getHash()))
+    return fail(why, "not this message type (fingerprint)");
+  const auto n = static_cast<std::int32_t>(bigEndian(b + joints_at, 4));
+  if (n < 0 || std::int64_t{n} * 3 * 8 > size - joints_at - 4)
+    return fail(why, "joint count does not fit the message");
+  try {
+    if (out.decode(data, 0, size) != size) return fail(why, "does not decode");
+  } catch (const std::exception&) {
+    return fail(why, "does not decode");
+  }
+  return true;
+}
+
 bool sizes(int n, int expected, std::size_t a, std::size_t b, std::size_t c, std::string* why) {
   if (n != expected) return fail(why, "wrong joint count");
   const auto un = static_cast<std::size_t>(n);
@@ -36,6 +63,14 @@ bool sizes(int n, int expected, std::size_t a, std::size_t b, std::size_t c, std
 }
 
 }  // namespace
+
+bool decodeChecked(const void* data, int size, overstep::robot_command_t& out, std::string* why) {
+  return decodeWithJoints(data, size, 8 + 2 * 8, out, why);  // utime, seq
+}
+
+bool decodeChecked(const void* data, int size, overstep::robot_state_t& out, std::string* why) {
+  return decodeWithJoints(data, size, 8 + 3 * 8, out, why);  // utime, seq, last_command_seq
+}
 
 void toLcm(const core::RobotCommand& in, overstep::robot_command_t& out) {
   out.utime = in.utime;

@@ -29,7 +29,8 @@ class YamlReader {
   /// naming the file (and the line).
   static YAML::Node loadFile(const std::string& path) { return parse(readFile(path), path); }
   /// Parses YAML text read from `path` (named in the error). A key given twice in a map is
-  /// refused (yaml-cpp keeps both and every reader would take the first).
+  /// refused (yaml-cpp keeps both and every reader would take the first), and so is a key that is
+  /// not a plain scalar.
   static YAML::Node parse(const std::string& text, const std::string& path) {
     YAML::Node root;
     try {
@@ -75,10 +76,17 @@ class YamlReader {
     }
   }
 
-  /// A finite number held by `node` itself.
+  /// The largest magnitude of any number in our YAML files: far beyond every quantity of a robot,
+  /// a planner or a simulation in SI units (the largest in the shipped files is 1e4), far below
+  /// where sums and products overflow (issue 20: 1e308 reached DART's and FCL's assertions).
+  static constexpr double kMaxMagnitude = 1e9;
+
+  /// A finite number of magnitude at most kMaxMagnitude held by `node` itself.
   double value(const YAML::Node& node, const std::string& key) const {
     const double v = as<double>(node, key);
     if (!std::isfinite(v)) fail(key, "expected a finite number, got " + fmt(v));
+    if (std::abs(v) > kMaxMagnitude)
+      fail(key, "expected a magnitude of at most " + fmt(kMaxMagnitude) + ", got " + fmt(v));
     return v;
   }
   double valueAtLeast(const YAML::Node& node, const std::string& key, double min) const {
@@ -142,7 +150,10 @@ class YamlReader {
     std::set<std::string> seen;
     for (const auto& kv : n) {
       const std::string key = join(where, scalarText(kv.first));
-      if (kv.first.IsScalar() && !seen.insert(kv.first.Scalar()).second)
+      // Every reader takes keys as strings: a list, map or null as a key threw yaml-cpp's
+      // TypedBadConversion, an "internal error" (found by tests/fuzz/fuzz_robot).
+      if (!kv.first.IsScalar()) throw InputError(path + ": " + key + ": expected a plain key");
+      if (!seen.insert(kv.first.Scalar()).second)
         throw InputError(path + ": " + key + ": duplicate key (again at line " +
                          std::to_string(kv.first.Mark().line + 1) + ")");
       refuseDuplicateKeys(kv.second, path, key, budget);

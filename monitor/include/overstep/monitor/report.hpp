@@ -12,6 +12,9 @@
 
 namespace overstep::monitor {
 
+/// The most snapshots in the side-view sequence (16 rows of 4 panels).
+constexpr int kMaxFrames = 64;
+
 struct ReportOptions {
   std::string run_dir;
   std::string robot;                        ///< robot YAML (must be the plan's robot)
@@ -20,7 +23,7 @@ struct ReportOptions {
   std::string out;                          ///< default RUN_DIR/report
   std::string python = "/usr/bin/python3";  ///< Debian's, where python3-matplotlib lives
   std::string script;  ///< default: monitor/python/report_plots.py of this source tree
-  int frames = 8;      ///< snapshots in the side-view sequence
+  int frames = 8;      ///< snapshots in the side-view sequence, 2 to kMaxFrames
   int dpi = 80;        ///< PNG resolution
 };
 
@@ -36,6 +39,10 @@ struct ReportSummary {
 /// lacks the plan or the log, the log has no executed plan ticks, or the plan is for another
 /// robot; std::runtime_error when the plotting script fails.
 ReportSummary makeReport(const ReportOptions& options);
+
+/// InputError for options outside their ranges (--dpi 20..400, --frames 2..kMaxFrames); called
+/// by makeReport, and by the command before it prints anything.
+void checkReportOptions(const ReportOptions& options);
 
 /// Runs `python script args...` and waits; std::runtime_error naming `what` when it cannot start
 /// or fails (the figures of `overstep report` and `overstep identify --plots`).
