@@ -10,26 +10,12 @@
 #include <iostream>
 
 #include "overstep/core/error.hpp"
+#include "overstep/core/stderr_capture.hpp"
 
 namespace overstep::cli {
 namespace {
 
-/// `s` with every byte outside printable ASCII as \xNN (the message stays one line).
-std::string printable(const std::string& s) {
-  static const char* const hex = "0123456789abcdef";
-  std::string out;
-  for (const char ch : s) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c >= 0x20 && c < 0x7f) {
-      out += ch;
-    } else {
-      out += "\\x";
-      out += hex[c >> 4];
-      out += hex[c & 15];
-    }
-  }
-  return out;
-}
+using core::printable;
 
 /// A decimal number of at most 10 digits in [lo, hi]; -1 otherwise.
 long long decimal(const std::string& s, long long lo, long long hi) {

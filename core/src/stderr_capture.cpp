@@ -9,26 +9,7 @@
 #include <iostream>
 
 namespace overstep::core {
-namespace {
-
-/// `s` with every byte outside printable ASCII as \xNN (the text stays one line).
-std::string printable(const std::string& s) {
-  static const char* const hex = "0123456789abcdef";
-  std::string out;
-  for (const char ch : s) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c >= 0x20 && c < 0x7f) {
-      out += ch;
-    } else {
-      out += "\\x";
-      out += hex[c >> 4];
-      out += hex[c & 15];
-    }
-  }
-  return out;
-}
-
-}  // namespace
+namespace {}  // namespace
 
 StderrCapture::StderrCapture() {
   std::fflush(stderr);
@@ -79,6 +60,22 @@ std::string StderrCapture::text() {
   }
   text_ = printable(out);
   return text_;
+}
+
+std::string printable(const std::string& s) {
+  static const char* const hex = "0123456789abcdef";
+  std::string out;
+  for (const char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c >= 0x20 && c < 0x7f) {
+      out += ch;
+    } else {
+      out += "\\x";
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    }
+  }
+  return out;
 }
 
 }  // namespace overstep::core

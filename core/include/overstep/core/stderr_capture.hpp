@@ -8,6 +8,9 @@
 
 namespace overstep::core {
 
+/// `s` with every byte outside printable ASCII as \xNN (a message quoting it stays one line).
+std::string printable(const std::string& s);
+
 /// While alive, what is written to the process's stderr (fd 2, e.g. by liblcm or urdfdom) goes
 /// into a temporary file instead; text() ends the capture and returns it. One at a time, from one
 /// thread (the descriptor is process-wide).
