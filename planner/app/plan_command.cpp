@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "overstep/cli/command.hpp"
 #include "overstep/core/error.hpp"
@@ -27,12 +28,18 @@ namespace {
 /// solved again from that solution with the margin of the failed family tightened by a fifth,
 /// at most twice. Measured: the identification loop's re-plan for a 1.5 kg payload (5 cm bar,
 /// 2 cm box) passed its rows with a CoP 1.3 mm over the box at the right touchdown.
-/// Returns the work of the re-solves' problems (evaluations and Jacobians).
+/// Returns the work of the re-solves' problems (evaluations and Jacobians); `checked` holds the
+/// dense plan of the final solution and its check when the last check was of that solution (the
+/// caller then need not sample and check it again).
+struct CheckedPlan {
+  core::Plan plan;
+  planner::CheckReport report;
+};
 planner::WorkAccount refineByCheck(planner::OverstepProblem& problem, planner::NlpSolver& solver,
                                    const planner::PlannerConfig& cfg, const core::ObstacleSpec& ob,
                                    const robots::WholeBodyModel& model, double rate, std::FILE* log,
                                    const std::function<void(const planner::IterationInfo&)>& row,
-                                   planner::PlanOutcome& out) {
+                                   planner::PlanOutcome& out, std::optional<CheckedPlan>& checked) {
   planner::WorkAccount extra;
   planner::PlannerConfig tight = cfg;
   std::unique_ptr<planner::OverstepProblem> refined;
@@ -42,9 +49,11 @@ planner::WorkAccount refineByCheck(planner::OverstepProblem& problem, planner::N
     extra.jacobians += refined->work().jacobians;
   };
   for (int retry = 0; retry < 2 && out.valid && !cli::StopSignals::requested(); ++retry) {
-    planner::OverstepProblem& current = refined ? *refined : problem;
-    const planner::CheckReport report =
-        planner::checkPlan(current.toPlan(out.final.x, rate), model);
+    // Sampled by the caller's problem (the margins do not enter the dense plan; its recorded
+    // configuration stays the caller's).
+    checked = CheckedPlan{problem.toPlan(out.final.x, rate), {}};
+    checked->report = planner::checkPlan(checked->plan, model);
+    const planner::CheckReport& report = checked->report;
     if (report.valid) break;
     bool contact = false, pelvis = false, other = false;
     for (const auto& f : report.families) {
@@ -74,7 +83,8 @@ planner::WorkAccount refineByCheck(planner::OverstepProblem& problem, planner::N
           std::fflush(log);
         },
         row, &cli::StopSignals::flag(), &from);
-    if (!again.valid) break;  // the first solution stays
+    if (!again.valid) break;  // the first solution stays (and `checked` is its check)
+    checked.reset();
     again.iterations += out.iterations;
     again.solve_time += out.solve_time;
     again.split.derivatives += out.split.derivatives;
@@ -203,6 +213,7 @@ int runPlan(const PlanOptions& o) {
   auto solver = planner::makeNloptSolver(cfg.solver, row, &cli::StopSignals::flag());
   planner::PlanOutcome out;
   planner::WorkAccount refined_work;  // re-solves after the 1 kHz check (refineByCheck)
+  std::optional<CheckedPlan> last_check;
   if (o.resample) {
     // No solve: the stored solution, evaluated and sampled with this configuration.
     if (warm.size() == 0) throw InputError("--resample needs --warm-start PLAN");
@@ -225,7 +236,8 @@ int runPlan(const PlanOptions& o) {
           std::fflush(log);
         },
         row, &cli::StopSignals::flag(), warm.size() ? &warm : nullptr);
-    refined_work = refineByCheck(problem, *solver, cfg, ob, model, o.rate, log, row, out);
+    refined_work =
+        refineByCheck(problem, *solver, cfg, ob, model, o.rate, log, row, out, last_check);
   }
 
   const Eigen::VectorXd& x = out.final.x;
@@ -264,9 +276,10 @@ int runPlan(const PlanOptions& o) {
                          {"gap", ob.gap},
                          {"margin", ob.margin}};
 
-  core::Plan plan = problem.toPlan(x, o.rate);
   // The planner's word is not enough: the written plan must also pass the independent check.
-  const planner::CheckReport report = planner::checkPlan(plan, model);
+  core::Plan plan = last_check ? std::move(last_check->plan) : problem.toPlan(x, o.rate);
+  const planner::CheckReport report =
+      last_check ? std::move(last_check->report) : planner::checkPlan(plan, model);
   std::vector<std::string> violated = out.violated;
   for (const auto& f : report.families)
     if (!f.ok()) violated.push_back("check:" + f.name);
