@@ -12,7 +12,7 @@ bash tools/check_format.sh
 ctest --test-dir build -j"$jobs" --output-on-failure --timeout 1500
 if [ "${OVERSTEP_SKIP_SANITIZE:-0}" != 1 ]; then
   echo "== sanitizer job (ASan + UBSan): unit tests"
-  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" \
+  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g1 -O1" \
         -DOVERSTEP_WERROR=ON -DOVERSTEP_SANITIZE=ON -DOVERSTEP_BUILD_BENCH=OFF >/dev/null
   cmake --build build-asan -j"$jobs" --target unit_tests  # only what this job runs
   # Problem.EqualityJacobianIsWellConditioned (142 s under ASan, 8 s in Release, where it runs)
