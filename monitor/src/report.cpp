@@ -10,15 +10,13 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <optional>
 
+#include "aligned_run.hpp"
 #include "overstep/core/error.hpp"
 #include "overstep/core/json_depth.hpp"
 #include "overstep/core/plan.hpp"
 #include "overstep/core/rotation.hpp"
-#include "overstep/monitor/lcm_log.hpp"
-#include "overstep/monitor/messages.hpp"
-#include "overstep/monitor/plan_match.hpp"
+#include "overstep/monitor/fidelity.hpp"
 #include "overstep/robots/collision.hpp"
 #include "overstep/robots/leg.hpp"
 #include "overstep/robots/whole_body_model.hpp"
@@ -31,21 +29,6 @@ namespace fs = std::filesystem;
 namespace {
 
 using core::rollPitch;
-
-/// One aligned tick.
-struct Row {
-  double t = 0.0;
-  int phase = 0;
-  int index = 0;  // plan sample
-  Eigen::Vector2d zmp_meas = Eigen::Vector2d::Zero(), zmp_ref = Eigen::Vector2d::Zero();
-  core::Vector6d w_meas[2];  // sole frame [M; F]
-  Eigen::VectorXd q_meas, q_cmd;
-  Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
-  bool ground_truth = false;
-  Eigen::Quaterniond imu = Eigen::Quaterniond::Identity();
-  double stab_level = 0.0;  // largest correction in units of 1 mrad / 1 mm
-  int stab_mode = 0;
-};
 
 std::string defaultScript() { return shippedScript("monitor/python/report_plots.py"); }
 
@@ -71,7 +54,43 @@ nlohmann::json capsules(robots::WholeBodyModel& model, const std::vector<int>& f
   return out;
 }
 
+/// The fidelity series, one row per tick (plan and hold): per foot the plan's and the measured
+/// normal force and local CoP.
+std::string fidelityCsv(const RunSeries& s) {
+  std::string csv = "t";
+  for (const char* f : {"right", "left"})
+    for (const char* c : {"fz_plan", "fz_meas", "cop_x_plan", "cop_y_plan", "cop_x_meas",
+                          "cop_y_meas", "contact_plan"})
+      csv += std::string(",") + f + "_" + c;
+  csv += ",base_speed\n";
+  char buf[64];
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%.4f", s.t[i]);
+    csv += buf;
+    for (const FootSeries& f : s.foot) {
+      for (double v : {f.fz_plan[i], f.fz_meas[i], f.cop_plan[i].x(), f.cop_plan[i].y(),
+                       f.cop_meas[i].x(), f.cop_meas[i].y()}) {
+        std::snprintf(buf, sizeof buf, ",%.6g", v);
+        csv += buf;
+      }
+      csv += f.plan_contact[i] ? ",1" : ",0";
+    }
+    std::snprintf(buf, sizeof buf, ",%.6g\n", s.base_speed[i]);
+    csv += buf;
+  }
+  return csv;
+}
+
 }  // namespace
+
+RunSeries runSeries(const std::string& plan_path, const std::string& log_path,
+                    const std::string& robot_path) {
+  const core::Plan plan = core::loadPlan(plan_path);
+  robots::WholeBodyModel model = robots::WholeBodyModel::fromFile(robot_path);
+  runtime::PlanTrack track(plan, model);  // validates the plan against the robot
+  const AlignedRun run = alignRun(plan, track, model.actuatedCount(), log_path, plan_path);
+  return toSeries(run, plan, model);
+}
 
 int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
   ReportOptions o = o_in;
@@ -98,79 +117,9 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
   for (const auto& c : d.capsules) cap_frames.push_back(model.frameIndex(c.link));
 
   // ---- align the log: one row per PLAN_REF / STABILIZER pair, with the latest state and command.
-  LogReader reader(o.log);
-  LogEvent ev;
-  AnyMessage msg;
-  std::optional<overstep::robot_state_t> state;
-  std::optional<overstep::robot_command_t> command;
-  std::optional<overstep::plan_reference_t> ref;
-  std::vector<Row> rows;
-  while (reader.next(ev)) {
-    if (decode(ev.data, ev.size, msg) != DecodeStatus::Ok) continue;
-    // Every message is checked against the plan (issue 20: another run's plan was drawn against
-    // this log, its phase index read past the plan's phases).
-    if (auto* s = std::get_if<overstep::robot_state_t>(&msg)) {
-      checkJointCount(s->num_joints, nA, ev.channel, o.log, o.plan);
-      state = *s;
-    }
-    if (auto* c = std::get_if<overstep::robot_command_t>(&msg)) {
-      checkJointCount(c->num_joints, nA, ev.channel, o.log, o.plan);
-      command = *c;
-    }
-    if (auto* p = std::get_if<overstep::plan_reference_t>(&msg)) {
-      checkPlanReference(*p, plan, o.log, o.plan);
-      ref = *p;
-    }
-    auto* st = std::get_if<overstep::stabilizer_status_t>(&msg);
-    if (!st || !ref || ref->seq != st->seq || !state || !command) continue;
-    const double t = ref->plan_time;
-    if (!rows.empty() && t <= rows.back().t) {
-      if (t == 0.0 && rows.size() == 1)
-        rows.pop_back();  // keep the last tick at the start
-      else
-        continue;  // paused, finished or lingering
-    }
-    Row r;
-    r.t = t;
-    r.phase = ref->phase;
-    r.index = plan.sampleAt(t, ref->phase);
-    r.zmp_meas << st->zmp_measured[0], st->zmp_measured[1];
-    r.zmp_ref << st->zmp_reference[0], st->zmp_reference[1];
-    r.q_meas = Eigen::Map<const Eigen::VectorXd>(state->q.data(), nA);
-    r.q_cmd = Eigen::Map<const Eigen::VectorXd>(command->q_ref.data(), nA);
-    for (int f = 0; f < 2; ++f) {
-      const double* ft = f == 0 ? state->ft_right : state->ft_left;
-      core::Vector6d w;
-      for (int i = 0; i < 6; ++i) w(i) = ft[i];
-      r.w_meas[f] = track.soleWrench(r.index, f, w);
-    }
-    r.ground_truth = state->has_ground_truth;
-    if (r.ground_truth) {
-      r.base.translation() << state->base_position[0], state->base_position[1],
-          state->base_position[2];
-      r.base.linear() = Eigen::Quaterniond(state->base_quaternion[0], state->base_quaternion[1],
-                                           state->base_quaternion[2], state->base_quaternion[3])
-                            .normalized()
-                            .toRotationMatrix();
-    }
-    r.imu = Eigen::Quaterniond(state->imu_quaternion[0], state->imu_quaternion[1],
-                               state->imu_quaternion[2], state->imu_quaternion[3])
-                .normalized();
-    double level = 0.0;
-    for (int i = 0; i < 2; ++i)
-      level = std::max({level, std::abs(st->right_foot_rotation[i]) / 1e-3,
-                        std::abs(st->left_foot_rotation[i]) / 1e-3,
-                        std::abs(st->body_attitude[i]) / 1e-3});
-    for (int i = 0; i < 3; ++i) level = std::max(level, std::abs(st->com_offset[i]) / 1e-3);
-    r.stab_level = level;
-    r.stab_mode = st->mode;
-    rows.push_back(std::move(r));
-  }
-  sum.log_break_offset = reader.breakOffset();
-  if (rows.size() < 2) {
-    throw InputError(o.log + ": no executed plan ticks in the log (OVERSTEP_PLAN_REF, " +
-                     "OVERSTEP_STABILIZER, OVERSTEP_STATE and OVERSTEP_COMMAND are needed)");
-  }
+  const AlignedRun run = alignRun(plan, track, nA, o.log, o.plan);
+  const std::vector<Row>& rows = run.rows;
+  sum.log_break_offset = run.break_offset;
 
   // ---- ticks.csv
   const fs::path data = fs::path(o.out) / "data";
@@ -330,6 +279,12 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
     frames.push_back(fr);
   }
   core::writeFileAtomic((data / "frames.json").string(), frames.dump());
+
+  // ---- fidelity.json / fidelity.csv: the execution's figures (issue 19) and their series.
+  const RunSeries series = toSeries(run, plan, model);
+  sum.fidelity = fidelityJson(computeFidelity(series));
+  core::writeFileAtomic((data / "fidelity.json").string(), sum.fidelity.dump(1));
+  core::writeFileAtomic((data / "fidelity.csv").string(), fidelityCsv(series));
 
   sum.out_dir = o.out;
   sum.ticks = static_cast<int>(rows.size());

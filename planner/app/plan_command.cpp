@@ -16,6 +16,7 @@
 #include "overstep/planner/check.hpp"
 #include "overstep/planner/solver.hpp"
 #include "overstep/planner/standing.hpp"
+#include "overstep/planner/version.hpp"
 #include "overstep/robots/whole_body_model.hpp"
 
 namespace overstep {
@@ -246,6 +247,7 @@ int runPlan(const PlanOptions& o) {
       cli::StopSignals::requested() ? "interrupted" : (out.valid ? "solved" : "infeasible");
   summary["solver_status"] = out.final.status;
   summary["valid"] = out.valid;
+  summary["planner_version"] = planner::plannerVersion();
   summary["duration"] = problem.durations(x).sum();
   summary["phase_durations"] = std::vector<double>(x.data(), x.data() + planner::kPhaseCount);
   summary["step_length"] = problem.stepLength(x);

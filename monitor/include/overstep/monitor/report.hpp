@@ -7,6 +7,7 @@
 /// report/index.html and report/report.json, a manifest of every figure with its series and time
 /// range. docs/report.md describes each figure.
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,7 @@ struct ReportSummary {
   double t_begin = 0.0, t_end = 0.0;  ///< plan time covered by the measurement, s
   std::vector<std::string> figures;   ///< PNG paths
   long long log_break_offset = -1;    ///< where a damaged log stopped being read (-1: intact)
+  nlohmann::json fidelity;            ///< the execution's figures (monitor/fidelity.hpp)
 };
 
 /// Writes the data files and runs the plotting script. InputError (one line) when the run folder
