@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <string_view>
 
 #include "overstep/core/effects_yaml.hpp"
 #include "overstep/core/error.hpp"
@@ -310,11 +311,29 @@ RobotDescription loadRobotDescriptionAt(const std::string& yaml_path, int depth)
     }
   }
 
-  d.content_hash = fnv1a64(readFile(d.urdf_path), fnv1a64(text));
+  d.content_hash = fnv1a64(readFile(d.urdf_path), fnv1a64(withoutSection(text, "stabilizer")));
   return d;
 }
 
 }  // namespace
+
+std::string withoutSection(const std::string& yaml, const std::string& key) {
+  std::string out;
+  bool skipping = false;
+  std::size_t pos = 0;
+  while (pos < yaml.size()) {
+    std::size_t end = yaml.find('\n', pos);
+    end = end == std::string::npos ? yaml.size() : end + 1;
+    const std::string_view line(yaml.data() + pos, end - pos);
+    // A top-level key starts a section; indented, blank and comment lines continue one.
+    const bool top = !line.empty() && line[0] != ' ' && line[0] != '\t' && line[0] != '#' &&
+                     line[0] != '\n' && line[0] != '\r';
+    if (top) skipping = line.substr(0, key.size() + 1) == key + ":";
+    if (!skipping) out.append(line);
+    pos = end;
+  }
+  return out;
+}
 
 std::vector<PayloadDescription> parsePayloads(const YAML::Node& p, const YamlReader& r) {
   if (!p.IsSequence()) r.fail("payload", "expected a list of {link, mass, offset}");

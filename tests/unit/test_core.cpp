@@ -67,6 +67,29 @@ void expectYamlError(const std::string& from, const std::string& to, const std::
   }
 }
 
+// The robot hash covers what shapes a plan: the stabilizer's gains can be tuned on a plan (the
+// plan stays the robot's), the model cannot.
+TEST(RobotDescription, HashIgnoresTheStabilizerSectionOnly) {
+  EXPECT_EQ(
+      core::withoutSection("a: 1\nstabilizer:\n  k: 2\n\n  # c\n  j: 3\nb: 4\n", "stabilizer"),
+      "a: 1\nb: 4\n");
+  EXPECT_EQ(core::withoutSection("stabilizer: {k: 2}\nstabilizers: 1", "stabilizer"),
+            "stabilizers: 1");
+  EXPECT_EQ(core::withoutSection("a: 1\n  stabilizer: 2\n", "stabilizer"),
+            "a: 1\n  stabilizer: 2\n");
+  auto hashWith = [](const std::string& from, const std::string& to) {
+    TempDir dir;
+    test::writeText(dir.path() / "hrp2.urdf", test::slurp(test::hrp2Urdf()));
+    test::writeText(dir.path() / "hrp2.yaml",
+                    test::replaceOnce(test::slurp(test::hrp2Yaml()), from, to));
+    return core::loadRobotDescription(dir.file("hrp2.yaml")).content_hash;
+  };
+  const std::uint64_t base = core::loadRobotDescription(test::hrp2Yaml()).content_hash;
+  EXPECT_EQ(hashWith("posture_gain: 0.5", "posture_gain: 0.0"), base);
+  EXPECT_EQ(hashWith("damping_roll: 60.0", "damping_roll: 90.0"), base);
+  EXPECT_NE(hashWith("stiffness: 707", "stiffness: 708"), base);
+}
+
 TEST(RobotDescription, RejectsNegativeStiffness) {
   expectYamlError("stiffness: 707", "stiffness: -707",
                   "elastic_joints[0].stiffness: expected >= 0");

@@ -126,7 +126,9 @@ struct RobotDescription {
   std::vector<CapsuleDescription> capsules;
   Eigen::VectorXd half_sitting;      ///< actuated joint angles, rad (size = actuated.size())
   double acceleration_limit = 30.0;  ///< rad/s^2, for planners
-  std::uint64_t content_hash = 0;    ///< FNV-1a of the YAML and URDF file contents
+  /// FNV-1a of the URDF and of the YAML without its `stabilizer:` section (what shapes a plan:
+  /// the runtime's gains do not, so a plan stays valid while they are tuned).
+  std::uint64_t content_hash = 0;
   /// Overlays (a YAML with `base: FILE`): the base description's file, and the effects added.
   std::string base_yaml;
   /// The robot file at the bottom of an overlay chain (yaml_path for a robot file): its
@@ -153,6 +155,10 @@ RobotDescription loadRobotDescription(const std::string& yaml_path);
 
 /// 64-bit FNV-1a hash of a byte string (stable across platforms), for content fingerprints.
 std::uint64_t fnv1a64(const std::string& bytes, std::uint64_t seed = 14695981039346656037ULL);
+
+/// `yaml` without the top-level section `key:` (its line and the indented, blank and comment
+/// lines under it), byte for byte otherwise.
+std::string withoutSection(const std::string& yaml, const std::string& key);
 
 /// Reads a whole file; throws InputError naming the path when it cannot be read.
 std::string readFile(const std::string& path);
