@@ -3,9 +3,11 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
@@ -43,26 +45,69 @@ std::int64_t epochMicros() {
 }
 
 // ------------------------------------------------------------------------------------- spy
+/// Exit code of `overstep spy` when a jar it needs is not installed (main.cpp's list).
+constexpr int kExitMissingJar = 5;
+
 struct SpyOptions {
   std::string lcm_url;
+  std::string java_dir = OVERSTEP_JAVA_DIR;  // where Debian puts its jars: /usr/share/java
   bool print_classpath = false;
 };
 
-std::string spyClasspath() {
+/// A jar of lcm-spy's class path is not installed (exit kExitMissingJar).
+struct SpyJarMissing : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// A jar lcm-spy needs and the Debian package that installs it.
+struct SpyJar {
+  const char* file;
+  const char* package;
+  bool on_class_path;  // else found through jchart2d's manifest
+};
+
+/// lcm-spy's class path: lcm.jar; jchart2d, which its message viewer and field plots draw with
+/// (without it a double-click on a channel threw NoClassDefFoundError); our types. jchart2d's
+/// manifest names the jars it needs (Class-Path: /usr/share/java/jide-oss.jar and
+/// xmlgraphics-commons.jar), which Java then loads from there: they are checked, not listed
+/// (lcm-spy loads every class of every jar listed to find the LCM types, and those two's
+/// optional classes fail to load on Java 17, an error line each). The Debian jars are looked up
+/// in `java_dir`, ours in the build. Throws SpyJarMissing naming the first jar missing.
+std::string spyClasspath(const std::string& java_dir) {
+  if (java_dir.find(':') != std::string::npos)
+    throw InputError("--java-dir: a class path cannot hold ':' (" + java_dir + ")");
+  static const SpyJar debian[] = {
+      {"lcm.jar", "liblcm-java", true},
+      {"jchart2d.jar", "libjchart2d-java", true},
+      {"jide-oss.jar", "libjide-oss-java", false},
+      {"xmlgraphics-commons.jar", "libxmlgraphics-commons-java", false}};
   std::string cp;
-  for (const char* jar : {OVERSTEP_LCM_JAR, OVERSTEP_MSGS_JAR}) {
-    if (!fs::exists(jar)) {
-      throw InputError(std::string(jar) + ": missing (build the overstep_msgs_jar target; " +
-                       "lcm.jar comes with the liblcm-java package)");
+  for (const SpyJar& j : debian) {
+    const std::string jar =
+        (fs::path(j.on_class_path ? java_dir : "/usr/share/java") / j.file).string();
+    if (!fs::is_regular_file(jar)) {
+      throw SpyJarMissing(jar + ": missing, lcm-spy needs it (apt-get install " + j.package +
+                          ", or tools/setup.sh)");
     }
-    cp += (cp.empty() ? "" : ":") + std::string(jar);
+    if (j.on_class_path) cp += (cp.empty() ? "" : ":") + jar;
   }
-  return cp;
+  if (!fs::is_regular_file(OVERSTEP_MSGS_JAR)) {
+    throw SpyJarMissing(std::string(OVERSTEP_MSGS_JAR) +
+                        ": missing, lcm-spy needs it for our types (build the "
+                        "overstep_msgs_jar target)");
+  }
+  return cp + ":" + OVERSTEP_MSGS_JAR;
 }
 
 int runSpy(const SpyOptions& o) {
   cli::checkLcmUrl(o.lcm_url);  // the Java spy takes the same URLs
-  const std::string cp = spyClasspath();
+  std::string cp;
+  try {
+    cp = spyClasspath(o.java_dir);
+  } catch (const SpyJarMissing& e) {
+    cli::printError("spy", e.what());
+    return kExitMissingJar;
+  }
   if (o.print_classpath) {
     std::cout << cp << "\n";
     return kExitOk;
@@ -79,7 +124,9 @@ int runSpy(const SpyOptions& o) {
                              const_cast<char*>(cp.c_str()), const_cast<char*>("lcm.spy.Spy"),
                              nullptr};
   ::execvp("java", argv.data());
-  throw InputError("cannot start java (install default-jre): " + std::string(std::strerror(errno)));
+  cli::printError("spy",
+                  "cannot start java (install default-jre): " + std::string(std::strerror(errno)));
+  return kExitMissingJar;
 }
 
 // ------------------------------------------------------------------------------------- monitor
@@ -271,15 +318,19 @@ void registerMonitorCommands(CLI::App& app, cli::Registry& registry) {
   auto so = std::make_shared<SpyOptions>();
   CLI::App* spy = app.add_subcommand("spy", "lcm-spy with the overstep types on its class path");
   spy->add_option("--lcm-url", so->lcm_url, "LCM URL (default: LCM_DEFAULT_URL or udpm default)");
+  spy->add_option("--java-dir", so->java_dir, "Folder of the Debian jars (lcm, jchart2d, ...)")
+      ->capture_default_str();
   spy->add_flag("--print-classpath", so->print_classpath,
-                "Print the class path (lcm.jar + overstep_msgs.jar) and exit (headless check)");
+                "Print the class path (lcm.jar, jchart2d.jar, overstep_msgs.jar) and exit");
   spy->footer(
       "Examples:\n"
       "  overstep spy                                  # live bus, default URL\n"
       "  overstep spy --lcm-url udpm://239.255.76.67:7667?ttl=0\n"
       "  lcm-logplayer --lcm-url=udpm://239.255.76.67:7700?ttl=0 runs/<run>/bus.lcmlog &\n"
       "  overstep spy --lcm-url udpm://239.255.76.67:7700?ttl=0   # a recorded run\n"
-      "Exit: 2 without a display (use ssh -X, or overstep monitor).");
+      "Double-click a channel for its fields; click a number field to plot it.\n"
+      "Exit: 2 without a display (use ssh -X, or overstep monitor), 5 a jar or java is\n"
+      "missing (named, with its Debian package).");
   registry.add(spy, [so] { return runSpy(*so); });
 
   auto mo = std::make_shared<MonitorOptions>();
