@@ -162,37 +162,44 @@ double stateRate(const std::string& path) {
   return n > 1 ? static_cast<double>(n - 1) / (static_cast<double>(last - first) * 1e-6) : 0.0;
 }
 
-/// Pixel statistics of a PNG (decoded by Debian's Matplotlib, which the report draws with):
-/// standard deviation over every channel (0 for a blank image) and, if `box` = "x y w h" is given,
-/// the number of red pixels in that box (a jchart2d trace is drawn red).
+/// Pixel statistics of PNGs (decoded by Debian's Matplotlib, which the report draws with, in one
+/// Python): standard deviation over every channel (0 for a blank image) and, if `box` = "x y w h"
+/// is given, the number of red pixels in that box (a jchart2d trace is drawn red).
 struct PngStats {
   bool ok = false;
   int width = 0, height = 0;
   double stddev = 0.0;
   long red = 0;
 };
-PngStats pngStats(const fs::path& png, const std::string& box = "") {
+std::vector<PngStats> pngStats(const std::vector<fs::path>& pngs, const std::string& box = "") {
   const std::string py =
-      "import sys, json, matplotlib.image as m, numpy as n\n"
-      "a = m.imread(sys.argv[1])[:, :, :3].astype(float)\n"
-      "r = {'w': a.shape[1], 'h': a.shape[0], 'std': float(a.std()), 'red': 0}\n"
-      "if len(sys.argv) > 2:\n"
-      "  x, y, w, h = map(int, sys.argv[2].split())\n"
-      "  b = a[y:y + h, x:x + w]\n"
-      "  r['red'] = int(((b[:, :, 0] > .75) & (b[:, :, 1] < .35) & (b[:, :, 2] < .35)).sum())\n"
-      "print(json.dumps(r))\n";
-  const Sh r = sh("/usr/bin/python3 -c " + quote(py) + " " + quote(png.string()) +
-                  (box.empty() ? "" : " " + quote(box)));
-  PngStats s;
-  if (r.code != 0) return s;
-  const json j = json::parse(r.out, nullptr, false);
-  if (!j.is_object()) return s;
-  s.ok = true;
-  s.width = j["w"];
-  s.height = j["h"];
-  s.stddev = j["std"];
-  s.red = j["red"];
-  return s;
+      "import sys, json, matplotlib.image as m\n"
+      "for f in sys.argv[2:]:\n"
+      "  try:\n"
+      "    a = m.imread(f)[:, :, :3].astype(float)\n"
+      "  except Exception:\n"
+      "    print('{}'); continue\n"
+      "  r = {'w': a.shape[1], 'h': a.shape[0], 'std': float(a.std()), 'red': 0}\n"
+      "  if sys.argv[1]:\n"
+      "    x, y, w, h = map(int, sys.argv[1].split())\n"
+      "    b = a[y:y + h, x:x + w]\n"
+      "    r['red'] = int(((b[:, :, 0] > .75) & (b[:, :, 1] < .35) & (b[:, :, 2] < .35)).sum())\n"
+      "  print(json.dumps(r))\n";
+  std::string cmd = "/usr/bin/python3 -c " + quote(py) + " " + quote(box);
+  for (const auto& p : pngs) cmd += " " + quote(p.string());
+  const Sh r = sh(cmd);
+  std::vector<PngStats> out(pngs.size());
+  std::stringstream ss(r.out);
+  std::string line;
+  for (std::size_t i = 0; i < pngs.size() && std::getline(ss, line); ++i) {
+    const json j = json::parse(line, nullptr, false);
+    if (!j.is_object() || !j.contains("w")) continue;
+    out[i] = {true, j["w"], j["h"], j["std"], j["red"]};
+  }
+  return out;
+}
+PngStats pngStats(const fs::path& png, const std::string& box = "") {
+  return pngStats(std::vector<fs::path>{png}, box)[0];
 }
 
 std::vector<std::string> lines(const std::string& text) {
@@ -320,12 +327,17 @@ TEST_F(SpyUi, ViewerOpensOnADoubleClickAndPlotsAField) {
 
   const auto g = x.geometry(main_win);
   long viewer = 0;
-  // The row a person double-clicks: in the Channel column, the middle of OVERSTEP_STATE's row.
-  x.click(g[0] + 80, g[1] + kSpyHeader + kSpyRow * row + kSpyRow / 2, 2);
-  EXPECT_TRUE(waitUntil(10.0, [&] { return (viewer = x.window("OVERSTEP_STATE")) != 0; }))
-      << "no message viewer after a double-click on OVERSTEP_STATE; windows:\n"
-      << x.windows() << "spy stderr:\n"
-      << test::slurp(spy_err.string());
+  // The row a person double-clicks: in the Channel column, the middle of OVERSTEP_STATE's row;
+  // again if nothing opened (as a person would, when a loaded machine took the two clicks for
+  // two single ones).
+  bool opened = false;
+  for (int attempt = 0; attempt < 2 && !opened; ++attempt) {
+    x.click(g[0] + 80, g[1] + kSpyHeader + kSpyRow * row + kSpyRow / 2, 2);
+    opened = waitUntil(5.0, [&] { return (viewer = x.window("OVERSTEP_STATE")) != 0; });
+  }
+  EXPECT_TRUE(opened) << "no message viewer after a double-click on OVERSTEP_STATE; windows:\n"
+                      << x.windows() << "spy stderr:\n"
+                      << test::slurp(spy_err.string());
   sleepFor(0.5);
   EXPECT_TRUE(x.screenshot(out / "spy_viewer.png"));
 
@@ -348,7 +360,7 @@ TEST_F(SpyUi, ViewerOpensOnADoubleClickAndPlotsAField) {
     ASSERT_TRUE(s.ok);
     EXPECT_GT(s.red, 200) << "the chart of utime shows no trace";
   }
-  test::waitOverstep(player, 20.0);
+  bg.stop(player);
   bg.stop(spy);
   // No exception anywhere: Swing prints uncaught ones on stderr, lcm-spy some on stdout.
   for (const fs::path& f : {spy_err, spy_out}) {
@@ -385,13 +397,16 @@ TEST_F(ReportPage, OpensWithEveryFigureAndTheVerdictAtTheTop) {
   for (std::sregex_iterator it(page.begin(), page.end(), img_re), end; it != end; ++it)
     imgs.push_back((*it)[1]);
   ASSERT_EQ(imgs.size(), man["figures"].size());
+  std::vector<fs::path> pngs;
   for (const std::string& src : imgs) {
-    const fs::path png = index.parent_path() / src;
-    ASSERT_TRUE(fs::is_regular_file(png)) << src;
-    const PngStats st = pngStats(png);
-    ASSERT_TRUE(st.ok) << src << ": not a PNG";
-    EXPECT_GT(st.width, 100) << src;
-    EXPECT_GT(st.stddev, 0.05) << src << ": blank";
+    pngs.push_back(index.parent_path() / src);
+    ASSERT_TRUE(fs::is_regular_file(pngs.back())) << src;
+  }
+  const std::vector<PngStats> stats = pngStats(pngs);
+  for (std::size_t i = 0; i < imgs.size(); ++i) {
+    ASSERT_TRUE(stats[i].ok) << imgs[i] << ": not a PNG";
+    EXPECT_GT(stats[i].width, 100) << imgs[i];
+    EXPECT_GT(stats[i].stddev, 0.05) << imgs[i] << ": blank";
   }
 
   // The page as the browser has it after loading: a copy with a <base> at the report folder
