@@ -212,11 +212,13 @@ class Terminal {
       for (char& c : line)
         if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) > 0x7e) c = '?';
       if (row > 0) out += "\r\n";
-      out += line + "\x1b[K";
+      // Cleared to its end unless it fills the row (the cursor then stays on the last column,
+      // whose character an erase would take).
+      out += line.size() < cols ? line + "\x1b[K" : line;
       ++row;
       begin = end + 1;
     }
-    out += "\x1b[J";
+    if (row < rows) out += "\x1b[J";  // the rows below this frame
     std::fwrite(out.data(), 1, out.size(), stdout);
     std::fflush(stdout);
   }
