@@ -204,6 +204,8 @@ TEST_F(MonitorCli, SpyClassPathHoldsEveryTypeAndTheSpy) {
   EXPECT_NE(no_chart.err.find("jchart2d.jar: missing"), std::string::npos) << no_chart.err;
   EXPECT_NE(no_chart.err.find("libjchart2d-java"), std::string::npos) << no_chart.err;
   EXPECT_EQ(std::count(no_chart.err.begin(), no_chart.err.end(), '\n'), 1) << no_chart.err;
+  // A folder that cannot be on a class path.
+  EXPECT_EQ(test::runOverstep("spy --print-classpath --java-dir /usr/share/java:/tmp").code, 2);
   // Without a display the spy cannot open its window: a clear error, exit 2.
   unsetenv("DISPLAY");
   const auto headless = test::runOverstep("spy");
