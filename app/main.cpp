@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
       "  overstep identify LOG --plan P      # what effect the model lacks\n"
       "  overstep <subcommand> --help        # options of one subcommand\n"
       "Exit codes: 0 ok, 1 internal error, 2 bad input, 3 infeasible request,\n4 a replay ended "
-      "holding after a fault, 130 interrupted.");
+      "holding after a fault, 5 a component is not installed, 130 interrupted.");
   overstep::cli::Registry registry;
   overstep::registerModelCommand(app, registry);
   overstep::registerPlanCommands(app, registry);

@@ -13,6 +13,10 @@ PACKAGES=(
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev libspdlog-dev libfmt-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   iproute2 python3-matplotlib python3-numpy clang-format
+  # `overstep spy` is a Swing window (a full JRE); the monitoring tests use it and the report and
+  # the terminal monitor as a person does (issue 21): an X server, a mouse, a browser, a terminal,
+  # screenshots.
+  openjdk-17-jre fonts-dejavu-core xvfb xdotool chromium tmux imagemagick
 )
 
 missing=()

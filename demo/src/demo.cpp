@@ -200,7 +200,10 @@ json demoRun(const DemoOptions& o, const fs::path& run) {
   v["wall_time"] = wall;
   v["exit_codes"] = {{"replay", replay_code}, {"sim", sim_code}};
   if (!o.no_report) {
-    // The figures (overstep report); a failure there is reported but does not change the verdict.
+    // The figures (overstep report), whose page opens with this verdict (read from the run
+    // folder: written first, then again with the report's path); a failure there is reported but
+    // does not change the verdict.
+    core::writeFileAtomic((run / "verdict.json").string(), v.dump(2) + "\n");
     const int code =
         waitFor(spawn({exe, "report", run.string(), "--robot", o.robot, "--json"},
                       (run / "report_summary.json").string(), (run / "report.log").string()),

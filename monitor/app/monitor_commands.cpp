@@ -1,11 +1,17 @@
 // `overstep spy`, `overstep monitor`, `overstep export` and `overstep report`.
+#include <sys/ioctl.h>
 #include <sys/stat.h>
+#include <termios.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
@@ -43,26 +49,69 @@ std::int64_t epochMicros() {
 }
 
 // ------------------------------------------------------------------------------------- spy
+/// Exit code of `overstep spy` when a jar it needs is not installed (main.cpp's list).
+constexpr int kExitMissingJar = 5;
+
 struct SpyOptions {
   std::string lcm_url;
+  std::string java_dir = OVERSTEP_JAVA_DIR;  // where Debian puts its jars: /usr/share/java
   bool print_classpath = false;
 };
 
-std::string spyClasspath() {
+/// A jar of lcm-spy's class path is not installed (exit kExitMissingJar).
+struct SpyJarMissing : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// A jar lcm-spy needs and the Debian package that installs it.
+struct SpyJar {
+  const char* file;
+  const char* package;
+  bool on_class_path;  // else found through jchart2d's manifest
+};
+
+/// lcm-spy's class path: lcm.jar; jchart2d, which its message viewer and field plots draw with
+/// (without it a double-click on a channel threw NoClassDefFoundError); our types. jchart2d's
+/// manifest names the jars it needs (Class-Path: /usr/share/java/jide-oss.jar and
+/// xmlgraphics-commons.jar), which Java then loads from there: they are checked, not listed
+/// (lcm-spy loads every class of every jar listed to find the LCM types, and those two's
+/// optional classes fail to load on Java 17, an error line each). The Debian jars are looked up
+/// in `java_dir`, ours in the build. Throws SpyJarMissing naming the first jar missing.
+std::string spyClasspath(const std::string& java_dir) {
+  if (java_dir.find(':') != std::string::npos)
+    throw InputError("--java-dir: a class path cannot hold ':' (" + java_dir + ")");
+  static const SpyJar debian[] = {
+      {"lcm.jar", "liblcm-java", true},
+      {"jchart2d.jar", "libjchart2d-java", true},
+      {"jide-oss.jar", "libjide-oss-java", false},
+      {"xmlgraphics-commons.jar", "libxmlgraphics-commons-java", false}};
   std::string cp;
-  for (const char* jar : {OVERSTEP_LCM_JAR, OVERSTEP_MSGS_JAR}) {
-    if (!fs::exists(jar)) {
-      throw InputError(std::string(jar) + ": missing (build the overstep_msgs_jar target; " +
-                       "lcm.jar comes with the liblcm-java package)");
+  for (const SpyJar& j : debian) {
+    const std::string jar =
+        (fs::path(j.on_class_path ? java_dir : "/usr/share/java") / j.file).string();
+    if (!fs::is_regular_file(jar)) {
+      throw SpyJarMissing(jar + ": missing, lcm-spy needs it (apt-get install " + j.package +
+                          ", or tools/setup.sh)");
     }
-    cp += (cp.empty() ? "" : ":") + std::string(jar);
+    if (j.on_class_path) cp += (cp.empty() ? "" : ":") + jar;
   }
-  return cp;
+  if (!fs::is_regular_file(OVERSTEP_MSGS_JAR)) {
+    throw SpyJarMissing(std::string(OVERSTEP_MSGS_JAR) +
+                        ": missing, lcm-spy needs it for our types (build the "
+                        "overstep_msgs_jar target)");
+  }
+  return cp + ":" + OVERSTEP_MSGS_JAR;
 }
 
 int runSpy(const SpyOptions& o) {
   cli::checkLcmUrl(o.lcm_url);  // the Java spy takes the same URLs
-  const std::string cp = spyClasspath();
+  std::string cp;
+  try {
+    cp = spyClasspath(o.java_dir);
+  } catch (const SpyJarMissing& e) {
+    cli::printError("spy", e.what());
+    return kExitMissingJar;
+  }
   if (o.print_classpath) {
     std::cout << cp << "\n";
     return kExitOk;
@@ -79,7 +128,9 @@ int runSpy(const SpyOptions& o) {
                              const_cast<char*>(cp.c_str()), const_cast<char*>("lcm.spy.Spy"),
                              nullptr};
   ::execvp("java", argv.data());
-  throw InputError("cannot start java (install default-jre): " + std::string(std::strerror(errno)));
+  cli::printError("spy",
+                  "cannot start java (install default-jre): " + std::string(std::strerror(errno)));
+  return kExitMissingJar;
 }
 
 // ------------------------------------------------------------------------------------- monitor
@@ -93,42 +144,139 @@ struct MonitorOptions {
   double window = 1.0;
 };
 
+std::atomic<bool>& resized() {
+  static std::atomic<bool> flag{false};
+  return flag;
+}
+extern "C" void onWinch(int) { resized().store(true); }
+
+/// The monitor's terminal while it redraws: the alternate screen with the cursor hidden, each
+/// frame drawn in place (home, every line cut to the width and cleared to its end, the rest of
+/// the screen cleared: no blank frame between two, hence no flicker), redrawn at once on a
+/// resize (SIGWINCH); the keyboard unbuffered without echo so that `q` quits. Everything is put
+/// back as it was on destruction, also when an error unwinds through it. Inactive (plain
+/// output, no keyboard) when stdout is not a terminal.
+class Terminal {
+ public:
+  explicit Terminal(bool active) : active_(active && ::isatty(STDOUT_FILENO) != 0) {
+    if (!active_) return;
+    keys_ = ::isatty(STDIN_FILENO) != 0 && ::tcgetattr(STDIN_FILENO, &saved_) == 0;
+    if (keys_) {
+      termios raw = saved_;
+      raw.c_lflag &= ~static_cast<tcflag_t>(ICANON | ECHO);  // ISIG kept: Ctrl-C stops
+      raw.c_cc[VMIN] = 0;
+      raw.c_cc[VTIME] = 0;
+      ::tcsetattr(STDIN_FILENO, TCSANOW, &raw);
+    }
+    struct sigaction sa {};
+    sa.sa_handler = onWinch;
+    sigemptyset(&sa.sa_mask);
+    ::sigaction(SIGWINCH, &sa, &prev_winch_);
+    std::fputs("\x1b[?1049h\x1b[?25l\x1b[H\x1b[2J", stdout);
+    std::fflush(stdout);
+  }
+  ~Terminal() {
+    if (!active_) return;
+    std::fputs("\x1b[?25h\x1b[?1049l", stdout);
+    std::fflush(stdout);
+    ::sigaction(SIGWINCH, &prev_winch_, nullptr);
+    if (keys_) ::tcsetattr(STDIN_FILENO, TCSANOW, &saved_);
+  }
+  Terminal(const Terminal&) = delete;
+  Terminal& operator=(const Terminal&) = delete;
+
+  bool active() const { return active_; }
+  /// True once `q` was typed.
+  bool quit() {
+    if (!keys_) return false;
+    char c = 0;
+    while (::read(STDIN_FILENO, &c, 1) == 1)
+      if (c == 'q' || c == 'Q') quit_ = true;
+    return quit_;
+  }
+  /// The terminal was resized since the last frame.
+  static bool resizedSinceLastFrame() { return resized().load(); }
+
+  /// One frame of `text` (lines separated by '\n'): at most the terminal's rows, each cut to
+  /// its columns; bytes that are not printable ASCII (channel names come from the bus) as '?'.
+  void draw(const std::string& text) {
+    winsize ws{};
+    const bool known = ::ioctl(STDOUT_FILENO, TIOCGWINSZ, &ws) == 0 && ws.ws_col > 0;
+    const std::size_t cols = known ? ws.ws_col : 80, rows = known && ws.ws_row > 0 ? ws.ws_row : 24;
+    std::string out = resized().exchange(false) ? "\x1b[H\x1b[2J" : "\x1b[H";
+    std::size_t row = 0, begin = 0;
+    while (begin < text.size() && row < rows) {
+      std::size_t end = text.find('\n', begin);
+      if (end == std::string::npos) end = text.size();
+      std::string line = text.substr(begin, std::min(end - begin, cols));
+      for (char& c : line)
+        if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) > 0x7e) c = '?';
+      if (row > 0) out += "\r\n";
+      // Cleared to its end unless it fills the row (the cursor then stays on the last column,
+      // whose character an erase would take).
+      out += line.size() < cols ? line + "\x1b[K" : line;
+      ++row;
+      begin = end + 1;
+    }
+    if (row < rows) out += "\x1b[J";  // the rows below this frame
+    std::fwrite(out.data(), 1, out.size(), stdout);
+    std::fflush(stdout);
+  }
+
+ private:
+  bool active_ = false, keys_ = false, quit_ = false;
+  termios saved_{};
+  struct sigaction prev_winch_ {};
+};
+
 void show(const monitor::Monitor& m, std::int64_t now, const std::string& src, bool json,
-          bool tty) {
+          Terminal& term) {
   if (json) {
     std::cout << jsonText(m.snapshot(now, src)) << std::endl;
     return;
   }
-  if (tty) std::cout << "\x1b[H\x1b[2J";
-  std::cout << m.render(now, src) << std::flush;
-  if (!tty) std::cout << "\n";
+  if (term.active()) {
+    term.draw(m.render(now, src));
+    return;
+  }
+  std::cout << m.render(now, src) << "\n" << std::flush;
 }
 
 int monitorLog(const MonitorOptions& o) {
   monitor::LogReader reader(o.source);
   monitor::Monitor mon(o.window);
   monitor::LogEvent ev;
-  const bool tty = ::isatty(STDOUT_FILENO) != 0;
   cli::StopSignals stop;
-  std::int64_t first = -1, last_show = std::numeric_limits<std::int64_t>::min() / 2, now = 0;
-  const double wall0 = wallSeconds();
-  while (reader.next(ev)) {
-    now = ev.timestamp;
-    if (first < 0) first = now;
-    if (!o.once && o.speed > 0.0) {  // play at the recorded pace
-      const double due = wall0 + static_cast<double>(now - first) * 1e-6 / o.speed;
-      while (wallSeconds() < due && !stop.requested())
-        std::this_thread::sleep_for(std::chrono::milliseconds(2));
-    }
-    if (stop.requested()) break;
-    mon.add(ev.channel, now, ev.data, ev.size);
-    if (!o.once &&
-        static_cast<double>(now - last_show) * 1e-6 >= o.interval * std::max(o.speed, 1.0)) {
-      show(mon, now, o.source, o.json, tty);
-      last_show = now;
+  bool quit = false;
+  std::int64_t now = 0;
+  {
+    Terminal term(!o.once && !o.json);
+    std::int64_t first = -1, last_show = std::numeric_limits<std::int64_t>::min() / 2;
+    const double wall0 = wallSeconds();
+    while (reader.next(ev)) {
+      now = ev.timestamp;
+      if (first < 0) first = now;
+      if (!o.once && o.speed > 0.0) {  // play at the recorded pace
+        const double due = wall0 + static_cast<double>(now - first) * 1e-6 / o.speed;
+        while (wallSeconds() < due && !stop.requested() && !(quit = term.quit())) {
+          if (Terminal::resizedSinceLastFrame()) show(mon, now, o.source, o.json, term);
+          std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        }
+      }
+      if (stop.requested() || quit) break;
+      mon.add(ev.channel, now, ev.data, ev.size);
+      if (!o.once &&
+          static_cast<double>(now - last_show) * 1e-6 >= o.interval * std::max(o.speed, 1.0)) {
+        show(mon, now, o.source, o.json, term);
+        last_show = now;
+      }
     }
   }
-  if (o.once || !o.json) show(mon, now, o.source, o.json, tty && !o.once);
+  // The end of the log (not on q or Ctrl-C): the last snapshot stays on the normal screen.
+  if (!stop.requested() && !quit && (o.once || !o.json)) {
+    Terminal plain(false);
+    show(mon, now, o.source, o.json, plain);
+  }
   if (reader.broken()) {
     throw InputError(o.source + ": damaged at byte " + std::to_string(reader.breakOffset()) + " (" +
                      reader.breakReason() + "); shown: the " + std::to_string(reader.events()) +
@@ -157,23 +305,28 @@ int monitorLive(const MonitorOptions& o) {
   LiveFeed feed(mon);
   lcm.subscribe(".*", &LiveFeed::handle, &feed);
   const std::string src = o.lcm_url.empty() ? "LCM (default URL)" : o.lcm_url;
-  const bool tty = ::isatty(STDOUT_FILENO) != 0;
   cli::StopSignals stop;
-  const double start = wallSeconds();
-  double last_show = 0.0;
-  while (!stop.requested()) {
-    lcm.handleTimeout(20);
-    const double w = wallSeconds();
-    if (o.once) {
-      if (w - start >= o.duration) break;
-      continue;
-    }
-    if (w - last_show >= o.interval) {
-      show(mon, epochMicros(), src, o.json, tty);
-      last_show = w;
+  {
+    Terminal term(!o.once && !o.json);
+    const double start = wallSeconds();
+    double last_show = 0.0;
+    while (!stop.requested() && !term.quit()) {
+      lcm.handleTimeout(20);
+      const double w = wallSeconds();
+      if (o.once) {
+        if (w - start >= o.duration) break;
+        continue;
+      }
+      if (w - last_show >= o.interval || Terminal::resizedSinceLastFrame()) {
+        show(mon, epochMicros(), src, o.json, term);
+        last_show = w;
+      }
     }
   }
-  if (o.once) show(mon, epochMicros(), src, o.json, false);
+  if (o.once) {
+    Terminal plain(false);
+    show(mon, epochMicros(), src, o.json, plain);
+  }
   return o.once || !stop.requested() ? kExitOk : kExitInterrupted;
 }
 
@@ -271,15 +424,19 @@ void registerMonitorCommands(CLI::App& app, cli::Registry& registry) {
   auto so = std::make_shared<SpyOptions>();
   CLI::App* spy = app.add_subcommand("spy", "lcm-spy with the overstep types on its class path");
   spy->add_option("--lcm-url", so->lcm_url, "LCM URL (default: LCM_DEFAULT_URL or udpm default)");
+  spy->add_option("--java-dir", so->java_dir, "Folder of the Debian jars (lcm, jchart2d, ...)")
+      ->capture_default_str();
   spy->add_flag("--print-classpath", so->print_classpath,
-                "Print the class path (lcm.jar + overstep_msgs.jar) and exit (headless check)");
+                "Print the class path (lcm.jar, jchart2d.jar, overstep_msgs.jar) and exit");
   spy->footer(
       "Examples:\n"
       "  overstep spy                                  # live bus, default URL\n"
       "  overstep spy --lcm-url udpm://239.255.76.67:7667?ttl=0\n"
       "  lcm-logplayer --lcm-url=udpm://239.255.76.67:7700?ttl=0 runs/<run>/bus.lcmlog &\n"
       "  overstep spy --lcm-url udpm://239.255.76.67:7700?ttl=0   # a recorded run\n"
-      "Exit: 2 without a display (use ssh -X, or overstep monitor).");
+      "Double-click a channel for its fields; click a number field to plot it.\n"
+      "Exit: 2 without a display (use ssh -X, or overstep monitor), 5 a jar or java is\n"
+      "missing (named, with its Debian package).");
   registry.add(spy, [so] { return runSpy(*so); });
 
   auto mo = std::make_shared<MonitorOptions>();

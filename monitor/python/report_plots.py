@@ -3,7 +3,8 @@
 
 Usage: report_plots.py REPORT_DIR [DPI]   (reads REPORT_DIR/data/{ticks.csv,meta.json,frames.json};
 writes REPORT_DIR/fig*.png, index.html and report.json, the manifest of every figure: its file,
-title, and per axes the plotted series and their time range).
+title, and per axes the plotted series and their time range; and the fidelity metrics and the
+verdict (RUN_DIR/verdict.json, from `overstep demo`) shown at the top of index.html).
 
 Plotting library: Matplotlib (Debian package python3-matplotlib), Agg backend (no display).
 """
@@ -252,10 +253,119 @@ def fig_sequence(out, frames, meta, man):
     man.add(out, fig, "fig1_sequence.png", "Side-view sequence", recs)
 
 
-def write_index(out, man, meta):
+def rms_max(errors):
+    """(RMS, largest magnitude) of the finite values, None without any."""
+    e = [abs(x) for x in errors if not math.isnan(x)]
+    if not e:
+        return None
+    return math.sqrt(sum(x * x for x in e) / len(e)), max(e)
+
+
+def fidelity(c, meta):
+    """How closely the executed motion followed the plan, from the aligned ticks: per quantity
+    the RMS and the largest error, in display units (mm, mrad, N)."""
+    out = []
+
+    def add(key, label, unit, scale, errors):
+        r = rms_max(errors)
+        if r is not None:
+            out.append({"key": key, "label": label, "unit": unit,
+                        "rms": r[0] * scale, "max": r[1] * scale})
+
+    add("zmp", "ZMP, measured - stabilizer reference", "mm", 1e3,
+        [math.hypot(mx - rx, my - ry) for mx, my, rx, ry in
+         zip(c["zmp_meas_x"], c["zmp_meas_y"], c["zmp_ref_x"], c["zmp_ref_y"])])
+    legs = []
+    for j in meta["joints"]:
+        legs += [m - p for m, p in zip(c[j["name"] + "_meas"], c[j["name"] + "_plan"])]
+    add("leg_joints", "leg joints, measured - plan (12 joints)", "mrad", 1e3, legs)
+    add("pelvis", "pelvis roll and pitch, measured - plan", "mrad", 1e3,
+        [m - p for k in ("roll", "pitch") for m, p in zip(c[k + "_meas"], c[k + "_plan"])])
+    for side in ("right", "left"):
+        add(f"{side}_fz", f"{side} foot Fz, measured - plan", "N", 1.0,
+            [m - p for m, p in zip(c[f"{side}_Fz_meas"], c[f"{side}_Fz_plan"])])
+    return out
+
+
+def read_verdict(run_dir):
+    """RUN_DIR/verdict.json as `overstep demo` writes it, or None."""
+    try:
+        with open(os.path.join(run_dir, "verdict.json")) as f:
+            v = json.load(f)
+        return v if isinstance(v, dict) else None
+    except (OSError, ValueError):
+        return None
+
+
+def verdict_reason(v):
+    """The reason `overstep demo` prints beside its verdict (app/src/demo_command.cpp)."""
+    if v.get("fell", True):
+        return "the robot fell"
+    if v.get("obstacle_contact", True):
+        return "the robot touched the obstacle"
+    if not v.get("finished", False):
+        return "the runtime stopped: " + str(v.get("runtime_fault", ""))
+    if not v.get("feet_beyond_obstacle", False):
+        return "a foot did not get past the obstacle"
+    if not v.get("static_at_end", False):
+        return "the robot was still moving at the end"
+    return "both feet past the obstacle, standing still"
+
+
+def num(v, fmt):
+    try:
+        return format(float(v), fmt)
+    except (TypeError, ValueError):
+        return "?"
+
+
+def verdict_html(v, fid):
+    """The top of the page: the run's verdict and the fidelity metrics."""
+    e = html.escape
+    parts = ["<section id='verdict'>"]
+    if v is None:
+        parts.append("<p class='verdict none'>No verdict: the run folder has no verdict.json "
+                     "(written by <code>overstep demo</code>).</p>")
+    else:
+        cleared = v.get("cleared") is True
+        parts.append(f"<p class='verdict {'cleared' if cleared else 'failed'}'><b>"
+                     f"{'CLEARED' if cleared else 'NOT CLEARED'}</b>: {e(verdict_reason(v))}</p>")
+        ob = v.get("obstacle") if isinstance(v.get("obstacle"), dict) else {}
+        cop = v.get("cop_max") if isinstance(v.get("cop_max"), dict) else {}
+        rows = [("executed / plan duration",
+                 f"{num(v.get('duration'), '.2f')} s / {num(v.get('plan_duration'), '.2f')} s"
+                 + ("" if v.get("plan_valid", True) else " (INVALID plan)")),
+                ("obstacle", f"{e(str(ob.get('shape', '?')))} {num(ob.get('height'), '.3f')} m high, "
+                             f"{num(ob.get('width'), '.3f')} m wide"),
+                ("tracking RMS", f"{num(v.get('tracking_rms'), '.4f')} rad"),
+                ("stabilizer effort", f"{num(v.get('stabilizer_effort'), '.4f')} rad"
+                                      + ("" if v.get("stabilizer", True) else " (stabilizer off)")),
+                ("largest CoP excursion", f"R {num(cop.get('right'), '.3f')} m, "
+                                          f"L {num(cop.get('left'), '.3f')} m"),
+                ("torso deviation max", f"{num(v.get('torso_deviation_max'), '.3f')} rad"),
+                ("fell / obstacle contact", f"{'yes' if v.get('fell') else 'no'} / "
+                                            f"{'yes' if v.get('obstacle_contact') else 'no'}"),
+                ("runtime", e(str(v.get("runtime_state", "?")))
+                 + (f" (fault: {e(str(v['runtime_fault']))})" if v.get("runtime_fault") else ""))]
+        parts.append("<table id='verdict-metrics'>" + "".join(
+            f"<tr><th>{k}</th><td>{val}</td></tr>" for k, val in rows) + "</table>")
+    parts.append("<h2>Fidelity: measured vs plan, over the executed ticks</h2>"
+                 "<table id='fidelity'><tr><th>quantity</th><th>RMS</th><th>max</th></tr>")
+    for f in fid:
+        parts.append(f"<tr data-key='{f['key']}'><td>{e(f['label'])}</td>"
+                     f"<td>{f['rms']:.2f} {f['unit']}</td><td>{f['max']:.2f} {f['unit']}</td></tr>")
+    parts.append("</table></section>")
+    return "\n".join(parts)
+
+
+def write_index(out, man, meta, verdict, fid):
     parts = ["<!doctype html><meta charset='utf-8'><title>overstep report</title>",
-             "<style>body{font-family:sans-serif;max-width:1100px;margin:auto}img{max-width:100%}</style>",
-             f"<h1>overstep report</h1><p>run: {html.escape(str(meta['run_dir']))}<br>plan: "
+             "<style>body{font-family:sans-serif;max-width:1100px;margin:auto}img{max-width:100%}"
+             "table{border-collapse:collapse}th,td{text-align:left;padding:2px 10px 2px 0}"
+             ".verdict{font-size:1.3em}.cleared b{color:#080}.failed b{color:#b00}</style>",
+             f"<h1>overstep report</h1>",
+             verdict_html(verdict, fid),
+             f"<p>run: {html.escape(str(meta['run_dir']))}<br>plan: "
              f"{html.escape(str(meta['plan']))} ({meta['duration']:.2f} s)<br>log: "
              f"{html.escape(str(meta['log']))}</p>"]
     if meta.get("log_break_offset", -1) >= 0:
@@ -284,11 +394,16 @@ def main():
     fig_wrenches(out, c, meta, man)
     fig_joints(out, c, meta, man)
     fig_cop(out, c, meta, man)
-    write_index(out, man, meta)
+    verdict = read_verdict(meta["run_dir"])
+    fid = fidelity(c, meta)
+    write_index(out, man, meta, verdict, fid)
     tmp = os.path.join(out, "report.json.tmp")
     with open(tmp, "w") as fh:
         json.dump({"figures": man.figures, "ticks": len(c["t"]),
-                   "t_range": [c["t"][0], c["t"][-1]]}, fh, indent=1)
+                   "t_range": [c["t"][0], c["t"][-1]], "fidelity": fid,
+                   "verdict": None if verdict is None else {
+                       "cleared": verdict.get("cleared") is True,
+                       "reason": verdict_reason(verdict)}}, fh, indent=1)
     os.replace(tmp, os.path.join(out, "report.json"))
 
 

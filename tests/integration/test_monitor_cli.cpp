@@ -176,15 +176,36 @@ TEST_F(MonitorCli, SpyClassPathHoldsEveryTypeAndTheSpy) {
     EXPECT_TRUE(fs::is_regular_file(jar)) << jar;
     ++jars;
   }
-  EXPECT_EQ(jars, 2);
-  // javap resolves each class through that class path, headlessly.
-  std::string classes = "lcm.spy.Spy";
+  // lcm.jar, jchart2d (which brings the jars it needs through its manifest), our types (issue
+  // 21: without jchart2d a double-click on a channel threw NoClassDefFoundError;
+  // test_monitor_ui clicks it).
+  EXPECT_EQ(jars, 3);
+  // javap resolves each class through that class path, headlessly: the spy, the chart classes
+  // its viewer draws with, our types.
+  std::string classes =
+      "lcm.spy.Spy info.monitorenter.gui.chart.ITrace2D info.monitorenter.gui.chart.Chart2D";
   for (const char* t :
        {"robot_command_t", "robot_state_t", "plan_reference_t", "stabilizer_status_t",
         "runtime_status_t", "replay_control_t", "sim_status_t"})
     classes += std::string(" overstep.") + t;
   const int code = std::system(("javap -cp '" + cp + "' " + classes + " >/dev/null").c_str());
   EXPECT_EQ(code, 0);
+  // A jar missing where Debian puts them: one line naming it and its package, exit 5.
+  const fs::path jars_dir = dir_->path() / "java";
+  fs::create_directories(jars_dir);
+  const auto none = test::runOverstep("spy --print-classpath --java-dir " + jars_dir.string());
+  EXPECT_EQ(none.code, 5);
+  EXPECT_NE(none.err.find((jars_dir / "lcm.jar").string() + ": missing"), std::string::npos)
+      << none.err;
+  EXPECT_EQ(std::count(none.err.begin(), none.err.end(), '\n'), 1) << none.err;
+  fs::create_symlink("/usr/share/java/lcm.jar", jars_dir / "lcm.jar");
+  const auto no_chart = test::runOverstep("spy --java-dir " + jars_dir.string());
+  EXPECT_EQ(no_chart.code, 5);
+  EXPECT_NE(no_chart.err.find("jchart2d.jar: missing"), std::string::npos) << no_chart.err;
+  EXPECT_NE(no_chart.err.find("libjchart2d-java"), std::string::npos) << no_chart.err;
+  EXPECT_EQ(std::count(no_chart.err.begin(), no_chart.err.end(), '\n'), 1) << no_chart.err;
+  // A folder that cannot be on a class path.
+  EXPECT_EQ(test::runOverstep("spy --print-classpath --java-dir /usr/share/java:/tmp").code, 2);
   // Without a display the spy cannot open its window: a clear error, exit 2.
   unsetenv("DISPLAY");
   const auto headless = test::runOverstep("spy");
