@@ -270,8 +270,10 @@ def yaml():
             ("dcm_integral_time", "10.0", "s, leak of the DCM integral"),
             ("cop_margin", "0.005", "m, desired CoPs stay this far inside the sole"),
             ("min_ds_force", "15.0", "N, least normal force per foot in double support"),
-            ("damping_roll", "60.0", "N m s/rad, foot damping D (sole x moment)"),
-            ("damping_pitch", "60.0", "N m s/rad, foot damping D (sole y moment)"),
+            # 240, not 60: with 60 the simulated robot's stance moments carried a 20-30 Hz limit
+            # cycle of 3 N m RMS on the default plan, gone at 120 and above (docs/runtime.md).
+            ("damping_roll", "240.0", "N m s/rad, foot damping D (sole x moment)"),
+            ("damping_pitch", "240.0", "N m s/rad, foot damping D (sole y moment)"),
             ("damping_time_constant", "1.0", "s, return of the foot rotation to the reference"),
             ("max_foot_rotation", "0.17", "rad (10 deg, Kajita 2010)"),
             ("max_foot_rotation_rate", "0.5", "rad/s"),

@@ -210,6 +210,49 @@ def fig_cop(out, c, meta, man):
     man.add(out, fig, "fig7_cop.png", "Local CoP per foot", recs)
 
 
+def fig_fidelity(out, meta, man):
+    """Touchdown loads and CoP deviation over time (data/fidelity.csv: the plan and the hold
+    after it), the plan beside the measurement."""
+    with open(os.path.join(out, "data", "fidelity.csv")) as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        return
+    col = {k: [float(r[k]) if r[k] not in ("", "nan") else math.nan for r in rows] for k in rows[0]}
+    t = col["t"]
+    fig, axs = plt.subplots(2, 2, figsize=(11, 6), sharex=True)
+    recs = []
+    for j, side in enumerate(("right", "left")):
+        ax = axs[0][j]
+        ax.plot(t, col[f"{side}_fz_plan"], label="plan", **PLAN)
+        ax.plot(t, col[f"{side}_fz_meas"], label="measured", **MEAS)
+        for p in meta["phases"][1:]:
+            if p[f"{side}_contact"]:
+                ax.axvline(p["start"], color="0.6", ls=":", lw=0.8, label="_")
+        ax.axvline(meta["duration"], color="k", ls="--", lw=0.8, label="_")
+        ax.set_ylabel("Fz (N)")
+        ax.set_title(f"{side} foot normal force (dotted: planned contact starts; dashed: plan end)",
+                     fontsize=8)
+        ax.grid(alpha=0.3)
+        recs.append(man.axes(ax, f"{side} Fz"))
+        ax = axs[1][j]
+        dev = [1e3 * math.hypot(xm - xp, ym - yp) for xm, ym, xp, yp in
+               zip(col[f"{side}_cop_x_meas"], col[f"{side}_cop_y_meas"],
+                   col[f"{side}_cop_x_plan"], col[f"{side}_cop_y_plan"])]
+        ax.plot(t, dev, label="|CoP measured - plan|", **MEAS)
+        ax.axhline(15.0, color="tab:red", ls="--", lw=0.8, label="_")
+        ax.axvline(meta["duration"], color="k", ls="--", lw=0.8, label="_")
+        ax.set_ylabel("CoP deviation (mm)")
+        ax.set_xlabel("time (s)")
+        ax.set_title("local CoP deviation (where the foot is loaded; red: 15 mm p95 target)",
+                     fontsize=8)
+        ax.grid(alpha=0.3)
+        recs.append(man.axes(ax, f"{side} CoP deviation"))
+    axs[0][0].legend(fontsize=8)
+    fig.suptitle("Execution fidelity: touchdown loads and CoP against the plan")
+    fig.tight_layout()
+    man.add(out, fig, "fig_fidelity.png", "Touchdown loads and CoP deviation", recs)
+
+
 def draw_robot(ax, caps, color, alpha):
     for cp in sorted(caps, key=lambda k: -0.5 * (k["p0"][1] + k["p1"][1])):
         far = 0.5 * (cp["p0"][1] + cp["p1"][1]) > 0  # left side: further from the viewer
@@ -261,7 +304,7 @@ def rms_max(errors):
     return math.sqrt(sum(x * x for x in e) / len(e)), max(e)
 
 
-def fidelity(c, meta):
+def tracking(c, meta):
     """How closely the executed motion followed the plan, from the aligned ticks: per quantity
     the RMS and the largest error, in display units (mm, mrad, N)."""
     out = []
@@ -319,8 +362,58 @@ def num(v, fmt):
         return "?"
 
 
-def verdict_html(v, fid):
-    """The top of the page: the run's verdict and the fidelity metrics."""
+EXECUTION_ROWS = [  # (key in data/fidelity.json, label, display scale, unit)
+    ("contact_losses", "contact losses", 1.0, ""),
+    ("peak_touchdown_load", "peak touchdown load", 1.0, "x weight"),
+    ("cop_deviation_p95", "local CoP deviation p95", 1e3, "mm"),
+    ("cop_deviation_max", "local CoP deviation max", 1e3, "mm"),
+    ("chatter_rms", "moment chatter (RMS above 20 Hz)", 1.0, "N m"),
+]
+
+
+def read_execution(out):
+    """data/fidelity.json (monitor/fidelity.hpp: each figure with its target), or None."""
+    try:
+        with open(os.path.join(out, "data", "fidelity.json")) as f:
+            x = json.load(f)
+        return x if isinstance(x, dict) else None
+    except (OSError, ValueError):
+        return None
+
+
+def figure_cell(f, scale, unit):
+    """A figure of fidelity.json as 'value unit (target T)' marked met or not."""
+    if not isinstance(f, dict):
+        return "<td>-</td>"
+    val = "n/a" if f.get("value") is None else format(f["value"] * scale, ".2f" if scale != 1.0 or unit else "g")
+    cls = "met" if f.get("met") else "miss"
+    return (f"<td class='{cls}'>{val} {unit} <small>(target &le; "
+            f"{format(f['target'] * scale, 'g')})</small></td>")
+
+
+def execution_html(x):
+    """The execution's figures per foot against their targets (issue 19)."""
+    if x is None:
+        return "<p>No execution figures (data/fidelity.json missing).</p>"
+    feet = x.get("feet", {})
+    rows = ["<table id='fidelity'><tr><th>figure</th><th>right foot</th><th>left foot</th></tr>"]
+    for key, label, scale, unit in EXECUTION_ROWS:
+        rows.append(f"<tr data-key='{key}'><th>{label}</th>"
+                    + "".join(figure_cell(feet.get(side, {}).get(key), scale, unit)
+                              for side in ("right", "left")) + "</tr>")
+    rows.append("<tr data-key='pelvis_deviation_max'><th>pelvis roll / pitch from the plan, max</th>"
+                + figure_cell(x.get("pelvis_deviation_max"), 1e3, "mrad") + "<td></td></tr>")
+    rows.append("<tr data-key='settling_time'><th>static after the plan's end</th>"
+                + figure_cell(x.get("settling_time"), 1.0, "s") + "<td></td></tr>")
+    rows.append("</table>")
+    misses = x.get("misses") or []
+    rows.append("<p>" + ("Every figure meets its target." if not misses else
+                         "Over target: " + html.escape(", ".join(misses)) + ".") + "</p>")
+    return "\n".join(rows)
+
+
+def verdict_html(v, fid, execution):
+    """The top of the page: the run's verdict, the execution's figures and the tracking."""
     e = html.escape
     parts = ["<section id='verdict'>"]
     if v is None:
@@ -349,8 +442,10 @@ def verdict_html(v, fid):
                  + (f" (fault: {e(str(v['runtime_fault']))})" if v.get("runtime_fault") else ""))]
         parts.append("<table id='verdict-metrics'>" + "".join(
             f"<tr><th>{k}</th><td>{val}</td></tr>" for k, val in rows) + "</table>")
-    parts.append("<h2>Fidelity: measured vs plan, over the executed ticks</h2>"
-                 "<table id='fidelity'><tr><th>quantity</th><th>RMS</th><th>max</th></tr>")
+    parts.append("<h2>Execution fidelity: the sensors against the plan, with the hold after it</h2>")
+    parts.append(execution_html(execution))
+    parts.append("<h2>Tracking: measured vs plan, over the executed ticks</h2>"
+                 "<table id='tracking'><tr><th>quantity</th><th>RMS</th><th>max</th></tr>")
     for f in fid:
         parts.append(f"<tr data-key='{f['key']}'><td>{e(f['label'])}</td>"
                      f"<td>{f['rms']:.2f} {f['unit']}</td><td>{f['max']:.2f} {f['unit']}</td></tr>")
@@ -358,13 +453,14 @@ def verdict_html(v, fid):
     return "\n".join(parts)
 
 
-def write_index(out, man, meta, verdict, fid):
+def write_index(out, man, meta, verdict, fid, execution):
     parts = ["<!doctype html><meta charset='utf-8'><title>overstep report</title>",
              "<style>body{font-family:sans-serif;max-width:1100px;margin:auto}img{max-width:100%}"
              "table{border-collapse:collapse}th,td{text-align:left;padding:2px 10px 2px 0}"
-             ".verdict{font-size:1.3em}.cleared b{color:#080}.failed b{color:#b00}</style>",
+             ".verdict{font-size:1.3em}.cleared b{color:#080}.failed b{color:#b00}"
+             ".met{color:#080}.miss{color:#b00}</style>",
              f"<h1>overstep report</h1>",
-             verdict_html(verdict, fid),
+             verdict_html(verdict, fid, execution),
              f"<p>run: {html.escape(str(meta['run_dir']))}<br>plan: "
              f"{html.escape(str(meta['plan']))} ({meta['duration']:.2f} s)<br>log: "
              f"{html.escape(str(meta['log']))}</p>"]
@@ -394,13 +490,16 @@ def main():
     fig_wrenches(out, c, meta, man)
     fig_joints(out, c, meta, man)
     fig_cop(out, c, meta, man)
+    fig_fidelity(out, meta, man)
     verdict = read_verdict(meta["run_dir"])
-    fid = fidelity(c, meta)
-    write_index(out, man, meta, verdict, fid)
+    fid = tracking(c, meta)
+    execution = read_execution(out)
+    write_index(out, man, meta, verdict, fid, execution)
     tmp = os.path.join(out, "report.json.tmp")
     with open(tmp, "w") as fh:
         json.dump({"figures": man.figures, "ticks": len(c["t"]),
-                   "t_range": [c["t"][0], c["t"][-1]], "fidelity": fid,
+                   "t_range": [c["t"][0], c["t"][-1]], "tracking": fid,
+                   "fidelity": execution,
                    "verdict": None if verdict is None else {
                        "cleared": verdict.get("cleared") is True,
                        "reason": verdict_reason(verdict)}}, fh, indent=1)
