@@ -42,11 +42,13 @@ void printFidelity(const json& f) {
   for (const char* side : {"right", "left"}) {
     const json& s = f["feet"][side];
     std::printf(
-        "fidelity %-5s: %d contact losses, touchdown load %.2f x weight, CoP deviation p95 %.1f "
-        "mm max %.1f mm, chatter %.2f N m\n",
-        side, static_cast<int>(figure(s["contact_losses"])), figure(s["peak_touchdown_load"]),
-        1e3 * figure(s["cop_deviation_p95"]), 1e3 * figure(s["cop_deviation_max"]),
-        figure(s["chatter_rms"]));
+        "fidelity %-5s: %d contact losses, touchdown %+.0f ms, load %.2f x weight, CoP deviation "
+        "p95 %.1f mm max %.1f mm, chatter %.2f N m\n",
+        side, static_cast<int>(figure(s["contact_losses"])),
+        s["touchdown_timing"].is_number() ? 1e3 * s["touchdown_timing"].get<double>()
+                                          : std::nan(""),
+        figure(s["peak_touchdown_load"]), 1e3 * figure(s["cop_deviation_p95"]),
+        1e3 * figure(s["cop_deviation_max"]), figure(s["chatter_rms"]));
   }
   std::string misses;
   for (const auto& m : f["misses"]) misses += (misses.empty() ? "" : ", ") + m.get<std::string>();

@@ -225,12 +225,12 @@ def fig_fidelity(out, meta, man):
         ax = axs[0][j]
         ax.plot(t, col[f"{side}_fz_plan"], label="plan", **PLAN)
         ax.plot(t, col[f"{side}_fz_meas"], label="measured", **MEAS)
-        for p in meta["phases"][1:]:
-            if p[f"{side}_contact"]:
+        for prev, p in zip(meta["phases"], meta["phases"][1:]):
+            if p[f"{side}_contact"] and not prev[f"{side}_contact"]:
                 ax.axvline(p["start"], color="0.6", ls=":", lw=0.8, label="_")
         ax.axvline(meta["duration"], color="k", ls="--", lw=0.8, label="_")
         ax.set_ylabel("Fz (N)")
-        ax.set_title(f"{side} foot normal force (dotted: planned contact starts; dashed: plan end)",
+        ax.set_title(f"{side} foot normal force (dotted: planned touchdown; dashed: plan end)",
                      fontsize=8)
         ax.grid(alpha=0.3)
         recs.append(man.axes(ax, f"{side} Fz"))
@@ -401,6 +401,10 @@ def execution_html(x):
         rows.append(f"<tr data-key='{key}'><th>{label}</th>"
                     + "".join(figure_cell(feet.get(side, {}).get(key), scale, unit)
                               for side in ("right", "left")) + "</tr>")
+    rows.append("<tr data-key='touchdown_timing'><th>first contact - planned touchdown</th>"
+                + "".join("<td>" + ("n/a" if not isinstance(feet.get(side, {}).get("touchdown_timing"), (int, float))
+                                    else format(1e3 * feet[side]["touchdown_timing"], "+.0f") + " ms") + "</td>"
+                          for side in ("right", "left")) + "</tr>")
     rows.append("<tr data-key='pelvis_deviation_max'><th>pelvis roll / pitch from the plan, max</th>"
                 + figure_cell(x.get("pelvis_deviation_max"), 1e3, "mrad") + "<td></td></tr>")
     rows.append("<tr data-key='settling_time'><th>static after the plan's end</th>"

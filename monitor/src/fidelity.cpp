@@ -95,6 +95,22 @@ double peakTouchdownLoad(const RunSeries& run, const FootSeries& f,
   return peak / run.weight;
 }
 
+/// The first measured contact around each planned touchdown against it (see FootFidelity).
+double touchdownTiming(const RunSeries& run, const FootSeries& f,
+                       const std::vector<double>& touchdowns, const FidelityParams& p) {
+  double worst = kNaN;
+  for (double td : touchdowns) {
+    double first = kNaN;
+    for (std::size_t i = 0; i < run.size() && std::isnan(first); ++i)
+      if (run.t[i] >= td - p.touchdown_before && run.t[i] <= td + p.touchdown_after &&
+          f.fz_meas[i] > p.contact_on * run.weight)
+        first = run.t[i] - td;
+    if (std::isnan(first)) return kNaN;  // never landed in the window: a contact loss already
+    if (std::isnan(worst) || std::abs(first) > std::abs(worst)) worst = first;
+  }
+  return worst;
+}
+
 void copDeviation(const RunSeries& run, const FootSeries& f, const FidelityParams& p,
                   FootFidelity& out) {
   const double loaded = p.loaded_fraction * run.weight;
@@ -219,6 +235,7 @@ Fidelity computeFidelity(const RunSeries& run, const FidelityParams& p) {
     r.touchdowns = static_cast<int>(run.touchdowns[us].size());
     r.contact_losses = contactLosses(run, f, p);
     r.peak_touchdown_load = peakTouchdownLoad(run, f, run.touchdowns[us], p);
+    r.touchdown_timing = touchdownTiming(run, f, run.touchdowns[us], p);
     copDeviation(run, f, p, r);
     r.chatter_rms = chatter(run, s, p);
   }
@@ -251,6 +268,9 @@ nlohmann::json fidelityJson(const Fidelity& f, const FidelityTargets& t) {
     } else {
       foot["peak_touchdown_load"] = nullptr;
     }
+    // Reported, no target of its own (the losses and loads judge what it causes).
+    foot["touchdown_timing"] =
+        std::isfinite(r.touchdown_timing) ? nlohmann::json(r.touchdown_timing) : nullptr;
     add(foot, "cop_deviation_p95", r.cop_p95, t.cop_p95, who);
     add(foot, "cop_deviation_max", r.cop_max, t.cop_max, who);
     foot["cop_deviation_p50"] = std::isfinite(r.cop_p50) ? nlohmann::json(r.cop_p50) : nullptr;

@@ -106,6 +106,14 @@ TEST(Fidelity, ABounceAfterTouchdownIsAContactLossAndAShortDipIsNot) {
   setMeasuredFz(early, 0, 1.89, 2.0, 100.0);
   setMeasuredFz(early, 0, 2.0, 2.3, 0.0);
   EXPECT_EQ(computeFidelity(early).foot[0].contact_losses, 1);
+  EXPECT_NEAR(computeFidelity(early).foot[0].touchdown_timing, -0.11, kDt / 2);
+  // Late by 90 ms: its timing, no loss.
+  RunSeries late = standing(3.0, 1.0);
+  swingRight(late, 1.0, 2.0);
+  setMeasuredFz(late, 0, 2.0, 2.09, 0.0);
+  EXPECT_NEAR(computeFidelity(late).foot[0].touchdown_timing, 0.09, kDt / 2);
+  EXPECT_EQ(computeFidelity(late).foot[0].contact_losses, 0);
+  EXPECT_NEAR(computeFidelity(dip).foot[0].touchdown_timing, 0.0, kDt / 2);
   // Never lands while the plan has it down: a loss.
   RunSeries never = standing(3.0, 1.0);
   swingRight(never, 1.0, 2.0);

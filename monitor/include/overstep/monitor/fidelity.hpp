@@ -60,6 +60,9 @@ struct FootFidelity {
   int touchdowns = 0;      ///< planned touchdowns in the run
   int contact_losses = 0;  ///< planned-contact intervals left (or never reached) by the foot
   double peak_touchdown_load = 0.0;  ///< largest Fz around a touchdown / weight (NaN: none)
+  /// s, measured first contact (Fz above contact_on) minus the planned touchdown, the largest in
+  /// magnitude over the foot's touchdowns (signed: < 0 early; NaN: none, or never landed)
+  double touchdown_timing = 0.0;
   double cop_p50 = 0.0, cop_p95 = 0.0, cop_max = 0.0;  ///< m, |CoP_meas - CoP_plan|
   int cop_samples = 0;                                 ///< ticks where both load the foot
   double chatter_rms = 0.0;  ///< N m, RMS of |(Mx, My)| above the cutoff in single support
