@@ -55,7 +55,8 @@ Row makeRow(const overstep::plan_reference_t& ref, const overstep::stabilizer_st
   return r;
 }
 
-/// The foot's sole-frame wrench [M; F] the plan asks for at sample k.
+}  // namespace
+
 core::Vector6d planSoleWrench(const core::Plan& plan, int f, int k) {
   const Eigen::MatrixXd& pw = f == 0 ? plan.right_wrench : plan.left_wrench;
   const Eigen::MatrixXd& pf = f == 0 ? plan.right_foot : plan.left_foot;
@@ -67,8 +68,6 @@ core::Vector6d planSoleWrench(const core::Plan& plan, int f, int k) {
   w << R_SW * pw.col(k).head<3>(), R_SW * pw.col(k).tail<3>();
   return w;
 }
-
-}  // namespace
 
 AlignedRun alignRun(const core::Plan& plan, const runtime::PlanTrack& track, int nA,
                     const std::string& log, const std::string& plan_path) {

@@ -43,6 +43,10 @@ struct AlignedRun {
 AlignedRun alignRun(const core::Plan& plan, const runtime::PlanTrack& track, int actuated,
                     const std::string& log, const std::string& plan_path);
 
+/// The sole-frame wrench [M; F] about the sole origin that the plan asks of foot f (0 right, 1
+/// left) at sample k.
+core::Vector6d planSoleWrench(const core::Plan& plan, int f, int k);
+
 /// The fidelity series of an aligned run (plan rows, then hold rows).
 RunSeries toSeries(const AlignedRun& run, const core::Plan& plan, robots::WholeBodyModel& model);
 

@@ -176,13 +176,8 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
     num(r.stab_level);
     csv += "," + std::to_string(r.stab_mode);
     for (int f = 0; f < 2; ++f) {
-      const Eigen::MatrixXd& pw = f == 0 ? plan.right_wrench : plan.left_wrench;
-      const Eigen::MatrixXd& pf = f == 0 ? plan.right_foot : plan.left_foot;
-      const Eigen::Matrix3d Rt = Eigen::Quaterniond(pf(3, k), pf(4, k), pf(5, k), pf(6, k))
-                                     .normalized()
-                                     .toRotationMatrix()
-                                     .transpose();
-      const Eigen::Vector3d mp = Rt * pw.col(k).head<3>(), fp = Rt * pw.col(k).tail<3>();
+      const core::Vector6d wp = planSoleWrench(plan, f, k);
+      const Eigen::Vector3d mp = wp.head<3>(), fp = wp.tail<3>();
       const Eigen::Vector3d mm = r.w_meas[f].head<3>(), fm = r.w_meas[f].tail<3>();
       for (int i = 0; i < 3; ++i) num(fp(i));
       for (int i = 0; i < 3; ++i) num(mp(i));
@@ -190,11 +185,11 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
       for (int i = 0; i < 3; ++i) num(mm(i));
       const bool contact = f == 0 ? plan.phases[static_cast<std::size_t>(r.phase)].right_contact
                                   : plan.phases[static_cast<std::size_t>(r.phase)].left_contact;
-      const double nan = std::nan("");
-      num(fp.z() > fz_min ? -mp.y() / fp.z() : nan);
-      num(fp.z() > fz_min ? mp.x() / fp.z() : nan);
-      num(fm.z() > fz_min ? -mm.y() / fm.z() : nan);
-      num(fm.z() > fz_min ? mm.x() / fm.z() : nan);
+      const Eigen::Vector2d cp = localCop(wp, fz_min), cm = localCop(r.w_meas[f], fz_min);
+      num(cp.x());
+      num(cp.y());
+      num(cm.x());
+      num(cm.y());
       csv += contact ? ",1" : ",0";
     }
     for (int i = 0; i < 12; ++i) {
