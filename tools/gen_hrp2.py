@@ -251,6 +251,31 @@ def yaml():
         y.append("  - {link: %s, p0: [%s], p1: [%s], radius: %s}" %
                  (ln, ", ".join(f(x) for x in p0), ", ".join(f(x) for x in p1), f(r)))
     y.append("")
+    y.append("# Capsule link pairs the planner keeps apart besides the right leg's against the left leg's (from")
+    y.append("# the kinematic tree): each hanging forearm and hand against its own thigh.")
+    y.append("self_collision:")
+    for side in ("R", "L"):
+        for arm in ("LINK3", "LINK6"):
+            y.append("  - [%sARM_%s, %sLEG_LINK2]" % (side, arm, side))
+    y.append("")
+    y.append("# Joint groups: truth files and overlays address joints by these names (and `all`).")
+    y.append("joint_groups:")
+    names = [j["name"] for j in joints]
+    for group, prefixes in (("legs", ("RLEG_", "LLEG_")), ("arms", ("RARM_", "LARM_")),
+                            ("chest", ("CHEST_",)), ("head", ("HEAD_",))):
+        y.append("  %s: [%s]" % (group, ", ".join(n for n in names if n.startswith(prefixes))))
+    y.append("")
+    y.append("# Identification excitation (overstep plan --excite): joints swung about half-sitting, amplitude rad")
+    y.append("# (times --amplitude), frequency Hz, phase rad. Incommensurate frequencies: the joints'")
+    y.append("# velocities are not collinear (identifiability). The legs stay: the robot stands.")
+    y.append("excitation:")
+    for (jn, a, fr, ph) in (("CHEST_JOINT0", 0.15, 0.31, 0.0), ("CHEST_JOINT1", 0.06, 0.47, 1.0),
+                            ("HEAD_JOINT0", 0.20, 0.73, 0.5), ("RARM_JOINT0", 0.40, 0.53, 0.0),
+                            ("LARM_JOINT0", 0.40, 0.61, 2.0), ("RARM_JOINT3", 0.30, 0.89, 1.0),
+                            ("LARM_JOINT3", 0.30, 1.07, 0.3), ("RARM_JOINT1", 0.10, 0.37, 0.7),
+                            ("LARM_JOINT1", 0.10, 0.43, 1.9)):
+        y.append("  - {joint: %s, amplitude: %s, frequency: %s, phase: %s}" % (jn, f(a), f(fr), f(ph)))
+    y.append("")
     y.append("# Half-sitting posture, deg, HRP-2 joint order [open: jrl-walkgen, sot-hrp2].")
     y.append("half_sitting_deg: [%s]" % ", ".join(f(half_sitting(j["name"])) for j in joints))
     y.append("")

@@ -63,6 +63,12 @@ const FootDescription* RobotDescription::foot(const std::string& side) const {
   return nullptr;
 }
 
+const JointGroup* RobotDescription::group(const std::string& group_name) const {
+  for (const auto& g : joint_groups)
+    if (g.name == group_name) return &g;
+  return nullptr;
+}
+
 std::string RobotDescription::hashHex() const {
   char buf[17];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(content_hash));
@@ -168,6 +174,70 @@ RobotDescription loadRobotDescription(const std::string& yaml_path) {
 }
 
 namespace {
+
+/// `self_collision:` a list of [link, link] pairs, each link carrying a capsule.
+void parseSelfCollision(const YAML::Node& root, const Reader& r, RobotDescription& d) {
+  const YAML::Node sc = root["self_collision"];
+  if (!sc) return;
+  if (!sc.IsSequence()) r.fail("self_collision", "expected a list of [link, link] pairs");
+  for (std::size_t i = 0; i < sc.size(); ++i) {
+    const std::string w = "self_collision[" + std::to_string(i) + "]";
+    if (!sc[i].IsSequence() || sc[i].size() != 2) r.fail(w, "expected [link, link]");
+    const auto a = r.as<std::string>(sc[i][0], w), b = r.as<std::string>(sc[i][1], w);
+    for (const std::string& l : {a, b}) {
+      const bool has = std::any_of(d.capsules.begin(), d.capsules.end(),
+                                   [&](const CapsuleDescription& c) { return c.link == l; });
+      if (!has) r.fail(w, "link '" + l + "' has no capsule");
+    }
+    if (a == b) r.fail(w, "a link paired with itself ('" + a + "')");
+    d.self_collision.emplace_back(a, b);
+  }
+}
+
+/// `joint_groups:` a map from a group's name to its actuated joints.
+void parseJointGroups(const YAML::Node& root, const Reader& r, RobotDescription& d) {
+  const YAML::Node jg = root["joint_groups"];
+  if (!jg) return;
+  if (!jg.IsMap()) r.fail("joint_groups", "expected a map: group name -> list of joints");
+  for (const auto& kv : jg) {
+    JointGroup g;
+    g.name = r.as<std::string>(kv.first, "joint_groups");
+    const std::string w = "joint_groups." + g.name;
+    if (g.name == "all") r.fail(w, "'all' is reserved (every actuated joint)");
+    if (!kv.second.IsSequence() || kv.second.size() == 0) r.fail(w, "expected a list of joints");
+    for (const auto& j : kv.second) {
+      const auto name = r.as<std::string>(j, w);
+      const int a = d.actuatedIndex(name);
+      if (a < 0) r.fail(w, "unknown actuated joint '" + name + "'");
+      if (std::find(g.joints.begin(), g.joints.end(), a) != g.joints.end())
+        r.fail(w, "joint '" + name + "' listed twice");
+      g.joints.push_back(a);
+    }
+    d.joint_groups.push_back(std::move(g));
+  }
+}
+
+/// `excitation:` the joints the identification excitation swings.
+void parseExcitation(const YAML::Node& root, const Reader& r, RobotDescription& d) {
+  const YAML::Node ex = root["excitation"];
+  if (!ex) return;
+  if (!ex.IsSequence()) r.fail("excitation", "expected a list");
+  for (std::size_t i = 0; i < ex.size(); ++i) {
+    const std::string w = "excitation[" + std::to_string(i) + "]";
+    ExcitationJoint e;
+    e.joint = r.as<std::string>(r.need(ex[i], "joint", w), w + ".joint");
+    if (d.actuatedIndex(e.joint) < 0)
+      r.fail(w + ".joint", "unknown actuated joint '" + e.joint + "'");
+    e.amplitude = r.positive(ex[i], "amplitude", w);
+    e.frequency = r.positive(ex[i], "frequency", w);
+    e.phase = r.number(ex[i], "phase", w);
+    if (e.amplitude > 1.0)
+      r.fail(w + ".amplitude", "expected <= 1 rad, got " + Reader::fmt(e.amplitude));
+    if (e.frequency > 10.0)
+      r.fail(w + ".frequency", "expected <= 10 Hz, got " + Reader::fmt(e.frequency));
+    d.excitation.push_back(e);
+  }
+}
 
 RobotDescription loadRobotDescriptionAt(const std::string& yaml_path, int depth) {
   const std::string text = readFile(yaml_path);  // parsed and hashed
@@ -295,6 +365,10 @@ RobotDescription loadRobotDescriptionAt(const std::string& yaml_path, int depth)
     }
   }
 
+  parseSelfCollision(root, r, d);
+  parseJointGroups(root, r, d);
+  parseExcitation(root, r, d);
+
   d.half_sitting = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(d.actuated.size()));
   if (const YAML::Node hs = root["half_sitting_deg"]) {
     if (!hs.IsSequence() || hs.size() != d.actuated.size())
@@ -311,7 +385,10 @@ RobotDescription loadRobotDescriptionAt(const std::string& yaml_path, int depth)
     }
   }
 
-  d.content_hash = fnv1a64(readFile(d.urdf_path), fnv1a64(withoutSection(text, "stabilizer")));
+  d.content_hash = fnv1a64(
+      readFile(d.urdf_path),
+      fnv1a64(withoutSection(withoutSection(withoutSection(text, "stabilizer"), "joint_groups"),
+                             "excitation")));
   return d;
 }
 

@@ -76,26 +76,19 @@ struct OverstepProblem::Impl : ProblemModel {
     for (const auto& c : d.capsules) {
       caps.push_back({model_template.frameIndex(c.link), c.p0, c.p1, c.radius, c.link});
     }
-    auto capIndex = [&](const std::string& link) {
-      for (std::size_t i = 0; i < caps.size(); ++i)
-        if (caps[i].link == link) return static_cast<int>(i);
-      return -1;
-    };
     for (int f = 0; f < 2; ++f)
       for (const std::string& l : leg_links[f])  // every capsule of the thigh, shank and foot
         for (std::size_t i = 0; i < caps.size(); ++i)
           if (caps[i].link == l) leg_caps[f].push_back(static_cast<int>(i));
-    // Self-collision pairs that a stepping motion can bring together: legs with each other and
-    // the hanging arms with the thighs.
+    // Self-collision pairs: the legs with each other, then the pairs the robot file lists
+    // (`self_collision:`, e.g. the hanging arms with the thighs).
     for (int a : leg_caps[kRight])
       for (int b : leg_caps[kLeft]) self_pairs.emplace_back(a, b);
-    for (int f = 0; f < 2; ++f) {
-      const std::string arm = f == kRight ? "RARM_" : "LARM_";
-      for (const std::string& l : {arm + "LINK3", arm + "LINK6"}) {  // forearm, hand
-        const int a = capIndex(l), b = capIndex(leg_links[f][0]);
-        if (a >= 0 && b >= 0) self_pairs.emplace_back(a, b);
-      }
-    }
+    for (const auto& [la, lb] : d.self_collision)
+      for (std::size_t a = 0; a < caps.size(); ++a)
+        for (std::size_t b = 0; b < caps.size(); ++b)
+          if (caps[a].link == la && caps[b].link == lb)
+            self_pairs.emplace_back(static_cast<int>(a), static_cast<int>(b));
     {
       robots::WholeBodyModel tmp(model_template);
       q_rest = tmp.halfSitting();

@@ -99,16 +99,9 @@ core::Plan excitationPlan(robots::WholeBodyModel& m, double duration, double amp
     throw InputError("excitation plan: amplitude " + std::to_string(amplitude) + " outside (0, 2]");
   core::Plan p = standingPlan(m, duration, rate);
   const auto& d = m.description();
-  struct Swing {
-    const char* joint;
-    double amp, freq, phase;  // rad, Hz, rad
-  };
-  // Incommensurate frequencies: the joints' velocities are not collinear (identifiability).
-  const Swing swings[] = {{"CHEST_JOINT0", 0.15, 0.31, 0.0}, {"CHEST_JOINT1", 0.06, 0.47, 1.0},
-                          {"HEAD_JOINT0", 0.20, 0.73, 0.5},  {"RARM_JOINT0", 0.40, 0.53, 0.0},
-                          {"LARM_JOINT0", 0.40, 0.61, 2.0},  {"RARM_JOINT3", 0.30, 0.89, 1.0},
-                          {"LARM_JOINT3", 0.30, 1.07, 0.3},  {"RARM_JOINT1", 0.10, 0.37, 0.7},
-                          {"LARM_JOINT1", 0.10, 0.43, 1.9}};
+  if (d.excitation.empty())
+    throw InputError("excitation plan: the robot file (" + d.yaml_path +
+                     ") names no joints under `excitation:`");
   const double fade = 1.0;  // s
   const double mg = m.totalMass() * d.gravity;
   const int rs = m.frameIndex(d.foot("right")->sole_frame);
@@ -128,11 +121,9 @@ core::Plan excitationPlan(robots::WholeBodyModel& m, double duration, double amp
       dde = 2.0 * w * w * std::cos(2.0 * w * tr);
     }
     Eigen::VectorXd q = p.q.col(k), v = Eigen::VectorXd::Zero(n), a = v;
-    for (const auto& s : swings) {
-      const int ai = d.actuatedIndex(s.joint);
-      if (ai < 0) continue;
-      const int c = m.actuatedCoordinate(ai);
-      const double w = 2.0 * M_PI * s.freq, A = amplitude * s.amp;
+    for (const core::ExcitationJoint& s : d.excitation) {
+      const int c = m.actuatedCoordinate(d.actuatedIndex(s.joint));
+      const double w = 2.0 * M_PI * s.frequency, A = amplitude * s.amplitude;
       const double f = A * std::sin(w * t + s.phase) - A * std::sin(s.phase);
       const double df = A * w * std::cos(w * t + s.phase);
       const double ddf = -A * w * w * std::sin(w * t + s.phase);

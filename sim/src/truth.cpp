@@ -16,8 +16,8 @@ namespace {
 
 using Reader = core::YamlReader;
 
-/// Actuated joint indices named by a group (legs, arms, chest, head, all), a joint name, or a list
-/// of either.
+/// Actuated joint indices named by a group (the robot file's joint_groups, or all), a joint name,
+/// or a list of these.
 std::vector<int> jointsOf(const YAML::Node& n, const std::string& key, const Reader& r,
                           const core::RobotDescription& d) {
   std::vector<std::string> names;
@@ -28,19 +28,17 @@ std::vector<int> jointsOf(const YAML::Node& n, const std::string& key, const Rea
   }
   std::set<int> out;
   for (const auto& name : names) {
-    auto match = [&](const std::string& j) {
-      if (name == "all") return true;
-      if (name == "legs") return j.find("LEG_JOINT") != std::string::npos;
-      if (name == "arms") return j.find("ARM_JOINT") != std::string::npos;
-      if (name == "chest") return j.rfind("CHEST_", 0) == 0;
-      if (name == "head") return j.rfind("HEAD_", 0) == 0;
-      return j == name;
-    };
-    bool any = false;
-    for (std::size_t i = 0; i < d.actuated.size(); ++i)
-      if (match(d.actuated[i].name)) out.insert(static_cast<int>(i)), any = true;
-    if (!any)
-      r.fail(key, "unknown joint or group '" + name + "' (groups: legs, arms, chest, head, all)");
+    if (name == "all") {
+      for (std::size_t i = 0; i < d.actuated.size(); ++i) out.insert(static_cast<int>(i));
+    } else if (const core::JointGroup* g = d.group(name)) {
+      out.insert(g->joints.begin(), g->joints.end());
+    } else if (const int i = d.actuatedIndex(name); i >= 0) {
+      out.insert(i);
+    } else {
+      std::string groups;
+      for (const auto& gr : d.joint_groups) groups += gr.name + ", ";
+      r.fail(key, "unknown joint or group '" + name + "' (groups: " + groups + "all)");
+    }
   }
   return {out.begin(), out.end()};
 }

@@ -8,6 +8,7 @@
 #include "overstep/core/error.hpp"
 #include "overstep/core/plan.hpp"
 #include "overstep/core/rotation.hpp"
+#include "overstep/robots/leg.hpp"
 
 namespace overstep::sysid {
 namespace {
@@ -68,6 +69,15 @@ struct Candidate {
   double scanned_value = 0.0, scanned_ci = 0.0;
 };
 
+/// The link a payload candidate sits on: the option, else the robot file's `torso` frame's link,
+/// else the base link.
+std::string payloadLink(const core::RobotDescription& d, const std::string& option) {
+  if (!option.empty()) return option;
+  for (const auto& f : d.frames)
+    if (f.name == "torso") return f.link;
+  return d.base_link;
+}
+
 }  // namespace
 
 Identification identify(const Dataset& data, const core::Plan& plan,
@@ -101,14 +111,18 @@ Identification identify(const Dataset& data, const core::Plan& plan,
 
   const int sensor_frame[2] = {model.frameIndex(d.foot("right")->force_sensor_frame),
                                model.frameIndex(d.foot("left")->force_sensor_frame)};
-  const int payload_frame = model.hasFrame(o.payload_link) ? model.frameIndex(o.payload_link) : -1;
+  const std::string payload_link = payloadLink(d, o.payload_link);
+  if (!model.hasFrame(payload_link))
+    throw InputError("identify: payload link '" + payload_link + "' is not in the model");
+  const int payload_frame = model.frameIndex(payload_link);
 
   // ---- rows (channel-major, then joint, then time) and residuals
-  // Torques only where inverse dynamics needs no contact force: joints off the legs.
-  auto offLeg = [&](int j) {
-    const std::string& n = d.actuated[static_cast<std::size_t>(j)].name;
-    return n.rfind("RLEG", 0) != 0 && n.rfind("LLEG", 0) != 0;
-  };
+  // Torques only where inverse dynamics needs no contact force: joints off the legs (the
+  // kinematic tree's chains from the base to the feet).
+  std::vector<bool> on_leg(d.actuated.size(), false);
+  for (const robots::LegChain& c : robots::legChains(model))
+    for (int a : c.actuated) on_leg[static_cast<std::size_t>(a)] = true;
+  auto offLeg = [&](int j) { return !on_leg[static_cast<std::size_t>(j)]; };
   std::vector<Row> rows;
   for (int ch = 0; ch < 2; ++ch)
     for (int j : moving)
@@ -729,6 +743,7 @@ Identification identify(const Dataset& data, const core::Plan& plan,
   if (!residual_seen) eval = test;
   std::sort(eval.begin(), eval.end());
   Identification out;
+  out.payload_link = payload_link;
   out.samples = N;
   out.moving_joints = static_cast<int>(moving.size());
   out.error_before = rms(rw, eval);

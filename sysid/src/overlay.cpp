@@ -48,8 +48,8 @@ std::string overlayYaml(const Identification& r, const core::RobotDescription& d
     const double m = param(r, "mass");
     const Eigen::Vector3d c(param(r, "mass*offset_x") / m, param(r, "mass*offset_y") / m,
                             param(r, "mass*offset_z") / m);
-    y << "payload:\n  - {link: CHEST_LINK1, mass: " << num(m) << ", offset: [" << num(c.x()) << ", "
-      << num(c.y()) << ", " << num(c.z()) << "]}\n";
+    y << "payload:\n  - {link: " << r.payload_link << ", mass: " << num(m) << ", offset: ["
+      << num(c.x()) << ", " << num(c.y()) << ", " << num(c.z()) << "]}\n";
   } else if (r.effect == "command_delay" || r.effect == "command_lag") {
     const bool delay = r.effect == "command_delay";
     const double v = param(r, delay ? "delay" : "lag");

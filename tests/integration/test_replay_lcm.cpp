@@ -1,16 +1,19 @@
 // `overstep replay` on LCM udpm inside the private network namespace of netns_run.sh: lockstep
 // end to end with the simulator, the lcm clock paced by the simulator's states, the watchdog when
 // the simulator is killed, pause / resume / stop over the control channel, dropped and delayed
-// state messages from a stand-in robot, and bad input that must not send anything.
+// state messages from a stand-in robot, malformed states on the bus, and bad input that must not
+// send anything.
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <deque>
 #include <future>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <random>
 #include <thread>
@@ -293,6 +296,110 @@ TEST_F(ReplayLcm, DroppedAndDelayedStatesAreCountedAndTheRunStaysSafe) {
   const bool held = code == 4 && r["state"] == "hold" &&
                     r["fault"].get<std::string>().find("no robot state") != std::string::npos;
   EXPECT_TRUE(finished || held) << r.dump();
+}
+
+/// Malformed robot states of every kind, as raw bytes for OVERSTEP_STATE: truncated, random
+/// bytes, an array length the bytes cannot hold (2^31 - 1 joints), NaN in a joint, the wrong joint
+/// count, and a message of another type (a command) on the state channel.
+std::vector<std::vector<std::uint8_t>> malformedStates(const overstep::robot_state_t& good,
+                                                       std::mt19937& rng) {
+  auto encode = [](const auto& m) {
+    std::vector<std::uint8_t> b(static_cast<std::size_t>(m.getEncodedSize()));
+    m.encode(b.data(), 0, static_cast<int>(b.size()));
+    return b;
+  };
+  std::vector<std::vector<std::uint8_t>> out;
+  const std::vector<std::uint8_t> valid = encode(good);
+  out.emplace_back(valid.begin(), valid.begin() + static_cast<long>(valid.size() / 2));
+  std::vector<std::uint8_t> noise(valid.size());
+  for (auto& c : noise) c = static_cast<std::uint8_t>(rng() & 0xff);
+  out.push_back(noise);
+  std::vector<std::uint8_t> huge = valid;  // num_joints at byte 32 (after hash and 3 int64)
+  huge[32] = 0x7f;
+  huge[33] = huge[34] = huge[35] = 0xff;
+  out.push_back(huge);
+  overstep::robot_state_t nan = good;
+  nan.q[3] = std::numeric_limits<double>::quiet_NaN();
+  out.push_back(encode(nan));
+  overstep::robot_state_t fewer = good;
+  fewer.num_joints -= 1;
+  fewer.q.pop_back();
+  fewer.qd.pop_back();
+  fewer.tau.pop_back();
+  out.push_back(encode(fewer));
+  overstep::robot_command_t cmd{};
+  out.push_back(encode(cmd));
+  return out;
+}
+
+// Issue 20: malformed states on the live bus are counted and ignored (the run goes on while
+// valid states keep coming), and once only malformed ones arrive the watchdog holds within three
+// periods. A stand-in robot sends valid states at 200 Hz with a malformed one after every
+// fourth; in the second run it stops sending valid states after 0.5 s.
+TEST_F(ReplayLcm, MalformedStatesAreCountedAndIgnoredAndOnlyMalformedOnesHold) {
+  lcm::LCM bus(std::getenv("LCM_DEFAULT_URL"));
+  ASSERT_TRUE(bus.good());
+  std::mt19937 rng(11);
+  for (const bool stop_valid : {false, true}) {
+    const std::string tag = stop_valid ? "hold" : "run";
+    const pid_t replay = guard_.add(test::spawnOverstep(
+        "replay " + plan_file_ + " --clock timer --start --json --quiet --linger 0.2",
+        dir_.file(tag + ".json"), dir_.file(tag + ".err")));
+    std::int64_t last_cmd = -1;
+    struct OnCmd {
+      std::int64_t* last;
+      void on(const lcm::ReceiveBuffer*, const std::string&, const overstep::robot_command_t* m) {
+        *last = std::max(*last, m->seq);
+      }
+    } on_cmd{&last_cmd};
+    lcm::Subscription* sub = bus.subscribe("OVERSTEP_COMMAND", &OnCmd::on, &on_cmd);
+    core::RobotState st = test::perfectState(*model_, plan_, 0);
+    int malformed = 0;
+    std::int64_t seq = 0;
+    const auto t0 = std::chrono::steady_clock::now();
+    auto next = t0;
+    int status = 0;
+    while (waitpid(replay, &status, WNOHANG) == 0) {
+      next += std::chrono::milliseconds(5);
+      std::this_thread::sleep_until(next);
+      while (bus.handleTimeout(0) > 0) {
+      }
+      const bool valid_now = !stop_valid || next - t0 < std::chrono::milliseconds(500);
+      st.seq = seq++;
+      st.utime = static_cast<std::int64_t>(seq * 5000);
+      st.last_command_seq = last_cmd;
+      overstep::robot_state_t m;
+      msgs::toLcm(st, m);
+      if (valid_now) bus.publish("OVERSTEP_STATE", &m);
+      if (seq % 4 == 0 || !valid_now) {
+        const auto bad = malformedStates(m, rng);
+        const auto& b = bad[static_cast<std::size_t>(malformed) % bad.size()];
+        bus.publish("OVERSTEP_STATE", b.data(), static_cast<unsigned>(b.size()));
+        ++malformed;
+      }
+      ASSERT_LT(seq, 200 * 60) << "the replay did not end";
+    }
+    bus.unsubscribe(sub);
+    const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    const json r = parse(dir_.file(tag + ".json"));
+    ASSERT_TRUE(r.is_object()) << test::slurp(dir_.file(tag + ".err"));
+    // Each malformed state is counted (loopback UDP may lose a few), none is acted on.
+    EXPECT_LE(r["bad_states"].get<int>(), malformed) << tag;
+    EXPECT_GE(r["bad_states"].get<int>(), malformed * 9 / 10) << tag;
+    if (!stop_valid) {
+      EXPECT_EQ(code, 0) << test::slurp(dir_.file(tag + ".err"));
+      EXPECT_EQ(r["state"], "finished") << r.dump();
+    } else {
+      EXPECT_EQ(code, 4) << test::slurp(dir_.file(tag + ".err"));
+      EXPECT_EQ(r["state"], "hold") << r.dump();
+      EXPECT_NE(r["fault"].get<std::string>().find("no robot state"), std::string::npos)
+          << r.dump();
+      EXPECT_EQ(r["hold_missed_periods"], 3);
+    }
+    // One line per kind at most on stderr, then silence (no flood).
+    const std::string err = test::slurp(dir_.file(tag + ".err"));
+    EXPECT_LE(std::count(err.begin(), err.end(), '\n'), 8) << err;
+  }
 }
 
 TEST_F(ReplayLcm, BadInputIsRefusedBeforeAnythingIsSent) {

@@ -45,7 +45,8 @@ constexpr int kJoint = 16;  // RARM_JOINT0
 constexpr double kRate = 200.0, kDuration = 1.5;
 
 /// Commands: hold the initial posture except RARM_JOINT0, which moves by +0.2 rad over 1 s.
-/// At ticks 50, 60 and 70 a bad command (NaN, 29 joints, stale seq) goes first.
+/// At ticks 50, 60 and 70 a bad command (NaN, 29 joints, stale seq) goes first; at 80 and 90 bytes
+/// that do not decode; at 100 a robot state (another type) on the command channel.
 SimRun drive(unsigned seed) {
   SimRun run;
   lcm::LCM bus(std::getenv("LCM_DEFAULT_URL"));
@@ -108,6 +109,7 @@ SimRun drive(unsigned seed) {
         }
         bus.publish("OVERSTEP_COMMAND", raw.data(), static_cast<unsigned>(raw.size()));
       }
+      if (tick == 100) bus.publish("OVERSTEP_COMMAND", &st);  // a state on the command channel
       cmd.seq = ++seq;
       bus.publish("OVERSTEP_COMMAND", &cmd);
       run.last_sent = cmd.seq;
@@ -147,9 +149,9 @@ TEST_F(SimLcm, LockstepClientMovesAJointAndReadsItBack) {
     EXPECT_NEAR(last.q[j], first.q[j], 2e-3) << "joint " << j;
   }
   EXPECT_EQ(last.last_command_seq, run.last_sent);
-  EXPECT_EQ(run.status.rejected_commands, 5)
-      << "NaN, wrong joint count, stale seq, 2^31 - 1 joints in 50 bytes, cut";
-  EXPECT_EQ(run.summary["rejected_commands"], 5);
+  EXPECT_EQ(run.status.rejected_commands, 6)
+      << "NaN, wrong joint count, stale seq, 2^31 - 1 joints in 50 bytes, cut, wrong type";
+  EXPECT_EQ(run.summary["rejected_commands"], 6);
   EXPECT_EQ(run.summary["accepted_commands"], run.last_sent);
   EXPECT_FALSE(run.status.fell);
   EXPECT_FALSE(run.status.obstacle_contact) << "standing clear of the default bar";

@@ -69,7 +69,7 @@ void expectYamlError(const std::string& from, const std::string& to, const std::
 
 // The robot hash covers what shapes a plan: the stabilizer's gains can be tuned on a plan (the
 // plan stays the robot's), the model cannot.
-TEST(RobotDescription, HashIgnoresTheStabilizerSectionOnly) {
+TEST(RobotDescription, HashIgnoresWhatDoesNotShapeAPlan) {
   EXPECT_EQ(
       core::withoutSection("a: 1\nstabilizer:\n  k: 2\n\n  # c\n  j: 3\nb: 4\n", "stabilizer"),
       "a: 1\nb: 4\n");
@@ -88,6 +88,49 @@ TEST(RobotDescription, HashIgnoresTheStabilizerSectionOnly) {
   EXPECT_EQ(hashWith("posture_gain: 0.5", "posture_gain: 0.0"), base);
   EXPECT_EQ(hashWith("damping_roll: 240.0", "damping_roll: 90.0"), base);
   EXPECT_NE(hashWith("stiffness: 707", "stiffness: 708"), base);
+  // The identification's inputs do not shape a plan either; the self-collision pairs do.
+  EXPECT_EQ(hashWith("frequency: 0.31", "frequency: 0.32"), base);
+  EXPECT_EQ(hashWith("  head: [HEAD_JOINT0, HEAD_JOINT1]", "  head: [HEAD_JOINT0]"), base);
+  EXPECT_NE(hashWith("  - [LARM_LINK6, LLEG_LINK2]\n", ""), base);
+}
+
+// Robot specifics the code once named as literals come from the robot file: the self-collision
+// pairs, the joint groups and the excitation.
+TEST(RobotDescription, ReadsSelfCollisionPairsGroupsAndExcitation) {
+  const core::RobotDescription d = core::loadRobotDescription(test::hrp2Yaml());
+  ASSERT_EQ(d.self_collision.size(), 4u);
+  EXPECT_EQ(d.self_collision[0],
+            std::make_pair(std::string("RARM_LINK3"), std::string("RLEG_LINK2")));
+  const core::JointGroup* legs = d.group("legs");
+  ASSERT_NE(legs, nullptr);
+  ASSERT_EQ(legs->joints.size(), 12u);
+  for (int j : legs->joints)
+    EXPECT_NE(d.actuated[static_cast<std::size_t>(j)].name.find("LEG_"), std::string::npos);
+  EXPECT_EQ(d.group("tail"), nullptr);
+  ASSERT_FALSE(d.excitation.empty());
+  for (const auto& e : d.excitation) {
+    EXPECT_GE(d.actuatedIndex(e.joint), 0) << e.joint;
+    EXPECT_GT(e.amplitude, 0.0);
+    EXPECT_GT(e.frequency, 0.0);
+  }
+}
+
+TEST(RobotDescription, RejectsBadSelfCollisionGroupsAndExcitation) {
+  expectYamlError("  - [RARM_LINK3, RLEG_LINK2]", "  - [RARM_LINK4, RLEG_LINK2]",
+                  "self_collision[0]: link 'RARM_LINK4' has no capsule");
+  expectYamlError("  - [RARM_LINK3, RLEG_LINK2]", "  - [RARM_LINK3]",
+                  "self_collision[0]: expected [link, link]");
+  expectYamlError("  chest: [CHEST_JOINT0, CHEST_JOINT1]", "  chest: [CHEST_JOINT0, CHEST_JOINT9]",
+                  "joint_groups.chest: unknown actuated joint 'CHEST_JOINT9'");
+  expectYamlError("  chest: [CHEST_JOINT0, CHEST_JOINT1]", "  all: [CHEST_JOINT0]",
+                  "joint_groups.all: 'all' is reserved");
+  expectYamlError("  chest: [CHEST_JOINT0, CHEST_JOINT1]", "  chest: [CHEST_JOINT0, CHEST_JOINT0]",
+                  "listed twice");
+  expectYamlError("{joint: CHEST_JOINT0, amplitude: 0.15", "{joint: CHEST_JOINT0, amplitude: 3",
+                  "excitation[0].amplitude: expected <= 1 rad");
+  expectYamlError("{joint: CHEST_JOINT0, amplitude", "{joint: TAIL_JOINT0, amplitude",
+                  "excitation[0].joint: unknown actuated joint 'TAIL_JOINT0'");
+  expectYamlError("frequency: 0.31", "frequency: -0.31", "excitation[0].frequency");
 }
 
 TEST(RobotDescription, RejectsNegativeStiffness) {

@@ -181,6 +181,34 @@ TEST_F(Problem, DerivativesMatchCentralDifferences) {
   }
 }
 
+// The derivatives are split over solver.threads workspaces: one thread and two give the same
+// numbers to the bit (so `--threads 1` and `--threads 2` give the same plan). The evaluation is
+// at a perturbed point so that every workspace's cached state differs from the baseline.
+TEST_F(Problem, DerivativesAreTheSameWithOneOrTwoThreads) {
+  PlannerConfig one, two;
+  one.solver.threads = 1;
+  two.solver.threads = 2;
+  core::ObstacleSpec ob;
+  ob.height = 0.05;
+  OverstepProblem p1(*model_, one, ob), p2(*model_, two, ob);
+  Eigen::VectorXd x = *x_;
+  x.tail(x.size() - p1.layout().legs).array() += 1e-3;
+  Eigen::VectorXd g1, g2;
+  Eigen::MatrixXd i1, e1, i2, e2;
+  for (int round = 0; round < 2; ++round) {  // the second round reuses dirty workspaces
+    Evaluation a1, a2;
+    p1.evaluate(x, a1);
+    p2.evaluate(x, a2);
+    ASSERT_EQ(a1.objective, a2.objective);
+    p1.derivatives(x, a1, g1, i1, e1);
+    p2.derivatives(x, a2, g2, i2, e2);
+    EXPECT_EQ((g1 - g2).cwiseAbs().maxCoeff(), 0.0) << round;
+    EXPECT_EQ((i1 - i2).cwiseAbs().maxCoeff(), 0.0) << round;
+    EXPECT_EQ((e1 - e2).cwiseAbs().maxCoeff(), 0.0) << round;
+    x(0) += 0.01;
+  }
+}
+
 // SLSQP solves the linearised equalities exactly: a row whose gradient is tiny beside the others
 // (e.g. a force that vanishes by construction of the wrench split) makes its steps huge. At the
 // restored guess the scaled equality Jacobian must have full rank with a bounded condition

@@ -78,6 +78,22 @@ struct CapsuleDescription {
   double radius = 0.0;
 };
 
+/// A named group of actuated joints (legs, arms, ...): how truth files and other inputs address
+/// joints by kind, without naming a robot's joints in code.
+struct JointGroup {
+  std::string name;
+  std::vector<int> joints;  ///< actuated indices, in the file's order
+};
+
+/// One joint the identification excitation swings: q = q_half_sitting + a sin(2 pi f t + phase)
+/// under a fade-in/out envelope (amplitude scaled by the command's --amplitude).
+struct ExcitationJoint {
+  std::string joint;
+  double amplitude = 0.0;  ///< rad
+  double frequency = 0.0;  ///< Hz
+  double phase = 0.0;      ///< rad
+};
+
 /// A point mass rigidly attached to a link (offset in the link frame), e.g. a payload.
 struct PayloadDescription {
   std::string link;
@@ -124,10 +140,16 @@ struct RobotDescription {
   std::vector<FootDescription> feet;  ///< right first, then left (may be empty)
   std::vector<FrameDescription> frames;
   std::vector<CapsuleDescription> capsules;
-  Eigen::VectorXd half_sitting;      ///< actuated joint angles, rad (size = actuated.size())
-  double acceleration_limit = 30.0;  ///< rad/s^2, for planners
-  /// FNV-1a of the URDF and of the YAML without its `stabilizer:` section (what shapes a plan:
-  /// the runtime's gains do not, so a plan stays valid while they are tuned).
+  /// Link pairs whose capsules the planner keeps apart, besides the right leg's against the left
+  /// leg's (which it takes from the kinematic tree). Every link carries a capsule.
+  std::vector<std::pair<std::string, std::string>> self_collision;
+  std::vector<JointGroup> joint_groups;
+  std::vector<ExcitationJoint> excitation;  ///< the identification excitation's joints
+  Eigen::VectorXd half_sitting;             ///< actuated joint angles, rad (size = actuated.size())
+  double acceleration_limit = 30.0;         ///< rad/s^2, for planners
+  /// FNV-1a of the URDF and of the YAML without its `stabilizer:`, `joint_groups:` and
+  /// `excitation:` sections (what shapes a plan: the runtime's gains and the identification's
+  /// inputs do not, so a plan stays valid while they are tuned).
   std::uint64_t content_hash = 0;
   /// Overlays (a YAML with `base: FILE`): the base description's file, and the effects added.
   std::string base_yaml;
@@ -136,9 +158,10 @@ struct RobotDescription {
   std::string robot_yaml;
   ModelEffects effects;
 
-  int actuatedIndex(const std::string& joint) const;           ///< -1 if absent
-  int elasticIndex(const std::string& joint) const;            ///< -1 if absent
-  const FootDescription* foot(const std::string& side) const;  ///< nullptr if absent
+  int actuatedIndex(const std::string& joint) const;             ///< -1 if absent
+  int elasticIndex(const std::string& joint) const;              ///< -1 if absent
+  const FootDescription* foot(const std::string& side) const;    ///< nullptr if absent
+  const JointGroup* group(const std::string& group_name) const;  ///< nullptr if absent
   /// Hex string of content_hash (16 digits).
   std::string hashHex() const;
 };

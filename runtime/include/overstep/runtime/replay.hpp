@@ -84,8 +84,9 @@ class Replay {
   void pause();   ///< Running -> Paused (the reference stops; the stabilizer keeps balancing)
   void resume();  ///< Paused -> Running
   void stop();    ///< anything -> Hold (reason Stopped)
-  /// An external fault (a fall flag from the simulator status, a malformed state message):
-  /// Hold with that reason.
+  /// An external fault (a fall flag from the simulator status): Hold with that reason. (A
+  /// malformed state is not one: the caller ignores it, and the watchdog holds if no valid
+  /// state follows.)
   void reportFault(FaultReason why);
 
   /// One control period. `state` is the newest robot state if one arrived since the last tick,

@@ -24,7 +24,9 @@ struct IdentifyOptions {
   /// The joint servo as the model knows it (the simulator's; hardware: its position loop):
   /// velocity gain Kv (1/s) at `servo_step` s, and the position stiffness against load torques.
   double servo_gain = 300.0, servo_step = 0.001, servo_stiffness = 3000.0;
-  std::string payload_link = "CHEST_LINK1";  ///< where a payload candidate is attached
+  /// Where a payload candidate is attached ("": the link of the robot file's `torso` frame, else
+  /// its base link).
+  std::string payload_link;
   double moving_threshold = 0.01;  ///< rad, std of a joint's command for it to count as moving
   std::string dump_residuals;      ///< CSV path: every residual row (channel, joint, t, value)
   /// Channels besides the joint positions: motor torques of the moving joints off the legs, and
@@ -76,6 +78,7 @@ struct Identification {
   std::map<std::string, ChannelError> channels;
   std::vector<CandidateFit> candidates;  ///< best first
   std::vector<ResidualRow> residuals;    ///< every row (for plots and --residuals)
+  std::string payload_link;              ///< the link the payload candidate is attached to
   int samples = 0, moving_joints = 0;
 };
 
