@@ -170,7 +170,7 @@ RobotDescription loadOverlay(const std::string& yaml_path, const std::string& te
 }  // namespace
 
 RobotDescription loadRobotDescription(const std::string& yaml_path) {
-  return loadRobotDescriptionAt(yaml_path, 0);
+  return guardYaml(yaml_path, [&] { return loadRobotDescriptionAt(yaml_path, 0); });
 }
 
 namespace {

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "aligned_run.hpp"
@@ -38,6 +39,17 @@ void setMeasured(robots::WholeBodyModel& model, const Row& r, int base_frame, Ei
     q(model.actuatedCoordinate(j)) = r.q_meas(j);
   Eigen::VectorXd v = Eigen::VectorXd::Zero(model.dofs()), a = v;
   model.anchorBase(base_frame, r.base, q, v, a);
+}
+
+/// Height above the ground of the lowest corner of foot f's sole rectangle, at the model's state.
+double lowestCorner(const robots::WholeBodyModel& model, const core::FootDescription& foot,
+                    int sole_frame) {
+  const Eigen::Isometry3d X = model.framePose(sole_frame);
+  double z = std::numeric_limits<double>::infinity();
+  for (const double x : {foot.sole.x_front, -foot.sole.x_back})
+    for (const double y : {foot.yMin(), foot.yMax()})
+      z = std::min(z, (X * Eigen::Vector3d(x, y, 0.0)).z());
+  return z;
 }
 
 nlohmann::json capsules(robots::WholeBodyModel& model, const std::vector<int>& frames) {
@@ -137,6 +149,10 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
     csv += std::string(",") + s + "_cop_x_plan," + s + "_cop_y_plan," + s + "_cop_x_meas," + s +
            "_cop_y_meas," + s + "_contact";
   }
+  // Lowest sole corner above the ground: the plan's, the plan's with its bushings undeflected, and
+  // the measured one (encoders and the ground-truth base; bushings unmeasured, taken undeflected).
+  for (const char* s : side)
+    csv += std::string(",") + s + "_sole_z_plan," + s + "_sole_z_plan_rigid," + s + "_sole_z_meas";
   for (int a : leg) {
     const std::string& j = d.actuated[static_cast<std::size_t>(a)].name;
     csv += "," + j + "_plan," + j + "_cmd," + j + "_meas";
@@ -191,6 +207,22 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
       num(cm.x());
       num(cm.y());
       csv += contact ? ",1" : ",0";
+    }
+    for (int f = 0; f < 2; ++f) {
+      const core::FootDescription& fd = d.feet[static_cast<std::size_t>(f)];
+      const int sf = model.frameIndex(fd.sole_frame);
+      Eigen::VectorXd q = plan.q.col(k);
+      model.setPositions(q);
+      num(lowestCorner(model, fd, sf));
+      for (int e = 0; e < model.elasticCount(); ++e) q(model.elasticCoordinate(e)) = 0.0;
+      model.setPositions(q);
+      num(lowestCorner(model, fd, sf));
+      if (r.ground_truth) {
+        setMeasured(model, r, base_frame, qm);
+        num(lowestCorner(model, fd, sf));
+      } else {
+        num(std::numeric_limits<double>::quiet_NaN());
+      }
     }
     for (int i = 0; i < 12; ++i) {
       const int a = leg[static_cast<std::size_t>(i)];

@@ -117,7 +117,7 @@ std::string PlannerConfig::toJson() const {
   return j.dump();
 }
 
-PlannerConfig loadPlannerConfig(const std::string& path) {
+static PlannerConfig loadPlannerConfigFile(const std::string& path) {
   YAML::Node root = core::YamlReader::loadFile(path);
   PlannerConfig c;
   if (root.IsNull()) return c;
@@ -202,6 +202,10 @@ PlannerConfig loadPlannerConfig(const std::string& path) {
   if (!(c.step_length_min < c.step_length_max)) r.fail("step_length_min", "expected < max");
   if (!(c.foot_y_min < c.foot_y_max)) r.fail("foot_y_min", "expected < foot_y_max");
   return c;
+}
+
+PlannerConfig loadPlannerConfig(const std::string& path) {
+  return core::guardYaml(path, [&] { return loadPlannerConfigFile(path); });
 }
 
 }  // namespace overstep::planner

@@ -88,7 +88,7 @@ TruthEffects noTruthEffects(const robots::WholeBodyModel& model) {
   return t;
 }
 
-TruthEffects loadTruth(const std::string& path, const robots::WholeBodyModel& model) {
+static TruthEffects loadTruthFile(const std::string& path, const robots::WholeBodyModel& model) {
   YAML::Node root = core::YamlReader::loadFile(path);
   const Reader r(path);
   TruthEffects t = noTruthEffects(model);
@@ -163,6 +163,10 @@ TruthEffects loadTruth(const std::string& path, const robots::WholeBodyModel& mo
     }
   }
   return t;
+}
+
+TruthEffects loadTruth(const std::string& path, const robots::WholeBodyModel& model) {
+  return core::guardYaml(path, [&] { return loadTruthFile(path, model); });
 }
 
 }  // namespace overstep::sim

@@ -20,10 +20,10 @@ std::string fmt(double v) {
 
 }  // namespace
 
-const std::array<ParamSpec, 28>& paramTable() {
+const std::array<ParamSpec, 33>& paramTable() {
   // Safety ranges: wide enough for any sane tuning, narrow enough to refuse typos (a gain 1000x
   // off, a sign error, a limit that would let the feet rotate by more than 20 degrees).
-  static const std::array<ParamSpec, 28> table{{
+  static const std::array<ParamSpec, 33> table{{
       {"zmp_delay", &Params::zmp_delay, 0.005, 0.2, "s"},
       {"dcm_kp", &Params::dcm_kp, 0.0, 20.0, "1/s"},
       {"dcm_ki", &Params::dcm_ki, 0.0, 100.0, "1/s^2"},
@@ -41,6 +41,11 @@ const std::array<ParamSpec, 28>& paramTable() {
       {"force_difference_gain", &Params::force_difference_gain, 0.0, 1e-2, "m/(N s)"},
       {"force_difference_time_constant", &Params::force_difference_time_constant, 0.05, 100.0, "s"},
       {"max_foot_height", &Params::max_foot_height, 0.0, 0.05, "m"},
+      {"landing_damping", &Params::landing_damping, 0.0, 1e6, "N s/m"},
+      {"landing_time", &Params::landing_time, 0.0, 2.0, "s"},
+      {"landing_time_constant", &Params::landing_time_constant, 0.01, 100.0, "s"},
+      {"max_landing_rate", &Params::max_landing_rate, 0.0, 1.0, "m/s"},
+      {"landing_search_depth", &Params::landing_search_depth, 0.0, 0.02, "m"},
       {"posture_gain", &Params::posture_gain, 0.0, 10.0, "1/s"},
       {"posture_time_constant", &Params::posture_time_constant, 0.05, 100.0, "s"},
       {"max_body_attitude", &Params::max_body_attitude, 0.0, 0.3, "rad"},

@@ -51,6 +51,7 @@ void scaleInto(const Output& raw, double s, Output& out) {
   for (std::size_t f = 0; f < 2; ++f) {
     out.foot_rotation[f] = s * raw.foot_rotation[f];
     out.foot_height[f] = s * raw.foot_height[f];
+    out.landing_height[f] = s * raw.landing_height[f];
   }
   out.body_attitude = s * raw.body_attitude;
 }
@@ -115,6 +116,9 @@ void Stabilizer::reset() {
   dcm_integral_.setZero();
   com_offset_vel_.setZero();
   from_hold_ = false;
+  swung_ = {false, false};
+  found_ = {false, false};
+  since_touchdown_ = {0.0, 0.0};
 }
 
 bool Stabilizer::enable() {
@@ -198,6 +202,40 @@ Fault Stabilizer::validateInputs(const Measurement& m, double dt) const {
   return Fault::None;
 }
 
+void Stabilizer::landing(const std::array<double, 2>& fz, double dt, Output& o) {
+  const Params& p = params_;
+  for (std::size_t f = 0; f < 2; ++f) {
+    const bool contact = ref_.foot[f].contact;
+    const bool loaded = fz[f] > p.contact_force;
+    if (!contact) {
+      swung_[f] = true;
+      found_[f] = false;
+      since_touchdown_[f] = 0.0;
+    } else {
+      since_touchdown_[f] += dt;
+    }
+    // The landing window: after a touchdown of the reference, until the sole first carries load
+    // (at most landing_time).
+    const bool window = contact && swung_[f] && since_touchdown_[f] <= p.landing_time;
+    if (window && loaded) found_[f] = true;
+    double rate = -o.landing_height[f] / p.landing_time_constant;
+    if (p.landing_damping > 0.0) {
+      if (window && !found_[f]) {
+        // Late: lowered onto the ground at the rate its planned force asks for.
+        const double fz_d = std::max(o.distribution.wrench[f](5), p.contact_force);
+        rate = -fz_d / p.landing_damping;
+      } else if (!contact && loaded) {
+        // Early (the reference has the foot in the air): yields, its desired force being 0.
+        rate += fz[f] / p.landing_damping;
+      }
+    }
+    o.landing_height[f] =
+        integrateClamped(o.landing_height[f], rate, dt, p.max_landing_rate, p.max_foot_height,
+                         status_.saturation, kFootHeight, kFootHeight);
+    o.landing_height[f] = std::max(o.landing_height[f], -p.landing_search_depth);
+  }
+}
+
 void Stabilizer::runFeedback(const Measurement& m, double dt, Output& o) {
   const Params& p = params_;
   const Reference& r = ref_;
@@ -259,8 +297,9 @@ void Stabilizer::runFeedback(const Measurement& m, double dt, Output& o) {
     }
   }
 
-  // 4. Foot force difference (double support): z = height of the left foot minus the right one.
-  double z = o.foot_height[1] - o.foot_height[0];
+  // 4. Foot force difference (double support): z = height of the left foot minus the right one
+  // (the landing offsets, below, are kept apart).
+  double z = (o.foot_height[1] - o.landing_height[1]) - (o.foot_height[0] - o.landing_height[0]);
   double zrate = -z / p.force_difference_time_constant;
   if (contact[0] && contact[1] && fz[0] > p.contact_force && fz[1] > p.contact_force) {
     const double dF = fz[1] - fz[0];
@@ -268,7 +307,8 @@ void Stabilizer::runFeedback(const Measurement& m, double dt, Output& o) {
     zrate += p.force_difference_gain * (dF - dF_d);
   }
   z = integrateClamped(z, zrate, dt, 0.0, 2.0 * p.max_foot_height, sat, 0, kFootHeight);
-  o.foot_height = {-0.5 * z, 0.5 * z};
+  landing(fz, dt, o);
+  o.foot_height = {-0.5 * z + o.landing_height[0], 0.5 * z + o.landing_height[1]};
 
   // 5. Body posture from the IMU.
   const Eigen::Vector2d att_err = rollPitch(r.torso) - rollPitch(m.torso);

@@ -8,10 +8,12 @@
 // With clang the same target file links against libFuzzer instead of this driver
 // (tests/fuzz/README.md).
 #include <algorithm>
+#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -109,9 +111,35 @@ Bytes mutate(const Bytes& in, std::mt19937_64& rng, std::size_t max_len) {
   return b;
 }
 
+/// The input being run, written to ./crash-input (as libFuzzer writes crash-<hash>) if the process
+/// dies on it: an uncaught exception (std::terminate) or a fatal signal.
+const Bytes* g_current = nullptr;
+
+void writeCurrent() {
+  if (g_current == nullptr) return;
+  if (std::FILE* f = std::fopen("crash-input", "wb")) {
+    std::fwrite(g_current->data(), 1, g_current->size(), f);
+    std::fclose(f);
+    std::fprintf(stderr, "fuzz driver: the input is in ./crash-input (%zu bytes)\n",
+                 g_current->size());
+  }
+  g_current = nullptr;
+}
+
+void onSignal(int sig) {
+  writeCurrent();
+  std::signal(sig, SIG_DFL);
+  std::raise(sig);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::set_terminate([] {
+    writeCurrent();
+    std::abort();
+  });
+  for (int sig : {SIGSEGV, SIGABRT, SIGFPE, SIGBUS, SIGILL}) std::signal(sig, onSignal);
   long runs = 1000;
   unsigned long long seed = 1;
   std::size_t max_len = 1 << 20;
@@ -144,11 +172,13 @@ int main(int argc, char** argv) {
   std::mt19937_64 rng(seed);
   long executions = 0;
   for (const Bytes& s : corpus) {
+    g_current = &s;
     LLVMFuzzerTestOneInput(s.data(), s.size());
     ++executions;
   }
   for (long r = 0; r < runs; ++r) {
     const Bytes b = mutate(corpus[static_cast<std::size_t>(r) % corpus.size()], rng, max_len);
+    g_current = &b;
     LLVMFuzzerTestOneInput(b.data(), b.size());
     ++executions;
   }

@@ -133,6 +133,16 @@ TEST(RobotDescription, RejectsBadSelfCollisionGroupsAndExcitation) {
   expectYamlError("frequency: 0.31", "frequency: -0.31", "excitation[0].frequency");
 }
 
+// Issue 20, found by fuzz_robot (10^6-run long run, seed 27): a list entry that is a scalar where
+// a map belongs made yaml-cpp throw BadSubscript past the typed reads (the process aborted).
+TEST(RobotDescription, ScalarListEntriesAreBadInputNotACrash) {
+  expectYamlError("elastic_joints:\n", "elastic_joints:\n  - 2.0}\n",
+                  "elastic_joints[0]: expected a map");
+  expectYamlError("frames:\n", "frames:\n  - tip\n", "frames[0]: expected a map");
+  expectYamlError("capsules:\n", "capsules:\n  - [1, 2]\n", "capsules[0]: expected a map");
+  expectYamlError("excitation:\n", "excitation:\n  - 0.3\n", "excitation[0]: expected a map");
+}
+
 TEST(RobotDescription, RejectsNegativeStiffness) {
   expectYamlError("stiffness: 707", "stiffness: -707",
                   "elastic_joints[0].stiffness: expected >= 0");

@@ -27,15 +27,17 @@ constexpr double kDt = 0.005;  // 200 Hz, HRP-2's control period
 // the foot damping loop can hold it (HRP-2's pitch bushing, 502 N m/rad, is marginally stiffer).
 constexpr double kSoftBushing = 300.0;
 
-/// Runs a fresh stabilizer until it is On (ramp of 0.01 s) on a neutral, error-free input.
-void bringOn(st::Stabilizer& s, const st::Reference& ref) {
+/// Runs a fresh stabilizer until it is On (ramp of 0.01 s) on a neutral, error-free input (the
+/// weight on foot `loaded`).
+void bringOn(st::Stabilizer& s, const st::Reference& ref, int loaded = 0) {
   s.setReference(ref);
   ASSERT_TRUE(s.enable());
   st::Output out;
   const auto feet = std::array<Eigen::Isometry3d, 2>{ref.foot[0].pose, ref.foot[1].pose};
   for (int i = 0; i < 10 && s.status().mode != st::Mode::On; ++i)
-    s.step(overstep::test::measurementWithZmp(ref.com, Eigen::Vector3d::Zero(), ref.zmp, feet), kDt,
-           out);
+    s.step(
+        overstep::test::measurementWithZmp(ref.com, Eigen::Vector3d::Zero(), ref.zmp, feet, loaded),
+        kDt, out);
   ASSERT_EQ(s.status().mode, st::Mode::On);
 }
 
@@ -435,6 +437,129 @@ TEST(StabilizerModes, RampInAndOutAreContinuous) {
   EXPECT_TRUE(prev.isZero()) << "off after the ramp-out";
   // Largest per-tick change: bounded by the rate limits plus the ramp's slope times the output.
   EXPECT_LT(max_jump, 0.004);
+}
+
+/// A landing on a closed-form plant: the robot stands on its left foot while the right sole
+/// descends to its planned touchdown at t = 0.5 s (z_plan = 0.05 (1 - s)^3, s = t / 0.5), then
+/// the plan loads it from 0 to half the weight over 0.3 s. The sole follows z_plan plus the
+/// stabilizer's height offset through a 10 ms first-order servo; the ground is `ground` m from
+/// the plan's (> 0: higher, the foot lands early; < 0: lower, late) and pushes back as a
+/// rubber sole and leg in series (2e5 N/m, 2e3 N s/m, no pull). Returns the sole force over time.
+std::vector<double> landOnPlant(double landing_damping, double ground) {
+  st::Params p = overstep::test::plantParams();
+  p.landing_damping = landing_damping;
+  p.max_foot_height = 0.02;
+  const auto feet = feetAt(0.1);
+  st::Stabilizer s(p);
+  st::Reference ref = overstep::test::staticReference(Eigen::Vector2d(0.0, 0.1), feet);
+  ref.foot[0].contact = false;
+  ref.foot[0].wrench.setZero();
+  ref.foot[1].wrench(5) = kMass * kG;
+  bringOn(s, ref, 1);
+  const double k = 2e5, c = 2e3, tau = 0.01, mg = kMass * kG;
+  double z = 0.05, zd = 0.0, force = 0.0;
+  std::vector<double> forces;
+  st::Output out;
+  for (int i = 0; i < 220; ++i) {  // 1.1 s
+    const double t = i * kDt;
+    const double sp = std::min(t / 0.5, 1.0), load = std::clamp((t - 0.5) / 0.3, 0.0, 1.0);
+    ref.foot[0].contact = t >= 0.5;
+    ref.foot[0].wrench(5) = 0.5 * mg * load;
+    ref.foot[1].wrench(5) = mg - ref.foot[0].wrench(5);
+    ref.zmp = Eigen::Vector2d(0.0, 0.1 - 0.1 * load);
+    ref.com.head<2>() = ref.zmp;
+    s.setReference(ref);
+    st::Measurement m =
+        overstep::test::measurementWithZmp(ref.com, Eigen::Vector3d::Zero(), ref.zmp, feet, 1);
+    m.foot_wrench[0].setZero();
+    m.foot_wrench[0](5) = force;
+    m.foot_wrench[1].setZero();
+    m.foot_wrench[1](5) = mg - force;
+    s.step(m, kDt, out);
+    const double target = 0.05 * std::pow(1.0 - sp, 3) + out.foot_height[0];
+    for (int j = 0; j < 10; ++j) {  // the plant at 2 kHz
+      const double h = kDt / 10;
+      const double zn = z + (target - z) / tau * h;
+      zd = (zn - z) / h;
+      z = zn;
+      force = z < ground ? std::max(0.0, k * (ground - z) - c * zd) : 0.0;
+    }
+    forces.push_back(force);
+  }
+  return forces;
+}
+
+// Issue 19: without the landing control a foot 10 mm late never carries its planned load and one
+// 10 mm early stamps (the leg drives it 10 mm into the ground: ~2000 N); with it (HRP-2's
+// D = 4000 N s/m) the late foot is lowered onto the ground and carries load shortly after its
+// planned touchdown, and the early one yields, its force bounded by about D times the plan's
+// descent rate (0.1 m/s where it meets the ground).
+TEST(StabilizerLanding, ALateFootIsLoweredAndAnEarlyOneYields) {
+  const double mg = kMass * kG;
+  auto peak = [](const std::vector<double>& f, int from, int to) {
+    return *std::max_element(f.begin() + from, f.begin() + to);
+  };
+  const std::vector<double> late_off = landOnPlant(0.0, -0.010);
+  const std::vector<double> late_on = landOnPlant(4000.0, -0.010);
+  EXPECT_EQ(peak(late_off, 0, 200), 0.0) << "off: the late foot never touches";
+  EXPECT_EQ(peak(late_on, 0, 100), 0.0) << "on: no contact before the planned touchdown";
+  EXPECT_GT(peak(late_on, 100, 200), 0.1 * mg) << "on: load within 0.5 s of the touchdown";
+  EXPECT_LT(peak(late_on, 0, 200), 1.0 * mg) << "on: and no stamp";
+  const std::vector<double> early_off = landOnPlant(0.0, 0.010);
+  const std::vector<double> early_on = landOnPlant(4000.0, 0.010);
+  EXPECT_GT(peak(early_off, 0, 100), 2.5 * mg) << "off: the early foot stamps";
+  EXPECT_LT(peak(early_on, 0, 100), 0.25 * peak(early_off, 0, 100)) << "on: it yields";
+  EXPECT_LT(peak(early_on, 0, 100), 1.0 * mg);
+}
+
+// The law itself, open loop: after a touchdown of the reference a sole that carries nothing is
+// lowered at max(F_d, contact_force) / D, no deeper than landing_search_depth, and stops once it
+// carries load; a sole loaded while the reference has it in the air rises at F_z / D.
+TEST(StabilizerLanding, TheOffsetFollowsTheLaw) {
+  st::Params p = overstep::test::plantParams();
+  p.landing_damping = 4000.0;
+  p.landing_search_depth = 0.004;
+  const auto feet = feetAt(0.1);
+  st::Reference ref = overstep::test::staticReference(Eigen::Vector2d(0.0, 0.1), feet);
+  ref.foot[0].contact = false;
+  st::Stabilizer s(p);
+  bringOn(s, ref, 1);
+  st::Measurement m =
+      overstep::test::measurementWithZmp(ref.com, Eigen::Vector3d::Zero(), ref.zmp, feet, 1);
+  st::Output out;
+  // Early: 200 N on the right sole while the reference swings it.
+  m.foot_wrench[0](5) = 200.0;
+  s.step(m, kDt, out);
+  EXPECT_NEAR(out.landing_height[0], 200.0 / 4000.0 * kDt, 1e-9);
+  EXPECT_EQ(out.landing_height[1], 0.0) << "the stance foot is left alone";
+  EXPECT_EQ(out.foot_height[0], out.landing_height[0]) << "force difference control is off";
+  // Back in the air, then the touchdown of the reference with nothing under the sole.
+  m.foot_wrench[0](5) = 0.0;
+  for (int i = 0; i < 40; ++i) s.step(m, kDt, out);
+  ref.foot[0].contact = true;
+  s.setReference(ref);
+  double prev = out.landing_height[0];
+  for (int i = 0; i < 20; ++i) {
+    s.step(m, kDt, out);
+    EXPECT_LT(out.landing_height[0], prev) << "lowered, tick " << i;
+    EXPECT_GE(out.landing_height[0], -0.004) << "no deeper than the search depth";
+    prev = out.landing_height[0];
+  }
+  EXPECT_LT(out.landing_height[0], 0.0);
+  // Contact: the lowering stops and the offset returns toward zero.
+  m.foot_wrench[0](5) = 100.0;
+  s.step(m, kDt, out);
+  const double after = out.landing_height[0];
+  s.step(m, kDt, out);
+  EXPECT_GT(out.landing_height[0], after);
+  // Off (D = 0): no offset at all.
+  p.landing_damping = 0.0;
+  st::Stabilizer off(p);
+  ref.foot[0].contact = false;
+  bringOn(off, ref, 1);
+  m.foot_wrench[0](5) = 200.0;
+  for (int i = 0; i < 10; ++i) off.step(m, kDt, out);
+  EXPECT_EQ(out.landing_height[0], 0.0);
 }
 
 TEST(StabilizerFaults, NanInputGivesAFaultAndHoldsTheLastOutput) {

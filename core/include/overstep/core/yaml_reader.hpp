@@ -50,6 +50,8 @@ class YamlReader {
 
   /// Child `name` of `node`; fails with "missing key" when absent. `where` prefixes the key.
   YAML::Node need(const YAML::Node& node, const std::string& name, const std::string& where) const {
+    // yaml-cpp throws BadSubscript for a key looked up in a scalar (found by fuzz_robot).
+    if (!node.IsMap()) fail(where.empty() ? name : where, "expected a map");
     YAML::Node child = node[name];
     if (!child) fail(join(where, name), "missing key");
     return child;
@@ -106,7 +108,7 @@ class YamlReader {
   }
   double numberOr(const YAML::Node& parent, const std::string& name, const std::string& where,
                   double fallback) const {
-    return parent[name] ? number(parent, name, where) : fallback;
+    return parent.IsMap() && parent[name] ? number(parent, name, where) : fallback;
   }
   double nonNegative(const YAML::Node& parent, const std::string& name,
                      const std::string& where) const {
@@ -175,5 +177,17 @@ class YamlReader {
   }
   std::string file_;
 };
+
+/// Runs `load` (a YAML file's reader), turning a yaml-cpp exception that escaped the typed
+/// reads (e.g. a key looked up in a scalar or a list entry: BadSubscript) into a one-line
+/// InputError naming the file and the line.
+template <typename F>
+auto guardYaml(const std::string& path, F&& load) -> decltype(load()) {
+  try {
+    return load();
+  } catch (const YAML::Exception& e) {
+    throw InputError(path + ": line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+}
 
 }  // namespace overstep::core

@@ -62,6 +62,21 @@ struct Params {
   double force_difference_time_constant = 1.0;  ///< s
   double max_foot_height = 0.02;                ///< m, |height offset| per foot
 
+  // ---- landing (per foot, around each planned touchdown), height offset z (m, up):
+  /// late (the reference has landed the foot, its sole carries no load yet): the foot is lowered,
+  ///   dz/dt = -max(F_d, contact_force) / D, F_d its desired normal force, down to
+  ///   -landing_search_depth, until the sole carries load (at most landing_time);
+  /// early (the reference has the foot in the air, its sole carries load): it yields,
+  ///   dz/dt = F_z / D - z / T;
+  /// otherwise z returns to zero, dz/dt = -z / T. D in N s/m (0: off). Both ways a sole that
+  /// meets the ground millimetres from the plan lands at its planned force instead of stamping
+  /// or bouncing (docs/runtime.md).
+  double landing_damping = 0.0;
+  double landing_time = 0.5;            ///< s after the planned touchdown
+  double landing_time_constant = 0.5;   ///< s (T)
+  double max_landing_rate = 0.1;        ///< m/s (|z| itself within max_foot_height)
+  double landing_search_depth = 0.015;  ///< m, deepest a late foot is lowered below the plan
+
   // ---- body posture control from the IMU: d(phi)/dt = K (ref - measured) - phi / T
   double posture_gain = 0.5;           ///< 1/s
   double posture_time_constant = 1.5;  ///< s
@@ -89,7 +104,7 @@ struct ParamSpec {
 };
 
 /// The tunable numeric parameters with their safety ranges (lipm_poles and feedback aside).
-const std::array<ParamSpec, 28>& paramTable();
+const std::array<ParamSpec, 33>& paramTable();
 
 /// Empty when every value is finite and inside its safety range and the soles are proper;
 /// otherwise a one-line reason naming the parameter.

@@ -10,6 +10,8 @@
 ///  3. Foot damping control: each sole rotates so that its measured moment follows the desired one
 ///     (on HRP-2 this works through the elastic ankle bushings).
 ///  4. Foot force difference control (double support): relative foot height.
+///     Landing control (each foot around its planned touchdown): its height follows its normal
+///     force error, so a foot that touches early yields and one that is late is lowered.
 ///  5. Body posture control from the IMU (torso roll and pitch).
 ///  6. Optional CoM admittance: CoM offset from the ZMP tracking error.
 /// Conventions: index 0 = right foot, 1 = left foot. Foot wrenches are [torque; force] about the
@@ -82,7 +84,8 @@ struct Measurement {
 struct Output {
   Eigen::Vector3d com_offset = Eigen::Vector3d::Zero();  ///< m, world
   std::array<Eigen::Vector2d, 2> foot_rotation{{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()}};
-  std::array<double, 2> foot_height{{0.0, 0.0}};            ///< m, along world z
+  std::array<double, 2> foot_height{{0.0, 0.0}};            ///< m, along world z (both terms below)
+  std::array<double, 2> landing_height{{0.0, 0.0}};         ///< m, the landing control's part of it
   Eigen::Vector2d body_attitude = Eigen::Vector2d::Zero();  ///< rad, torso roll, pitch
 
   // telemetry
@@ -131,6 +134,8 @@ class Stabilizer {
   void enterHold(Fault f);
   Fault validateInputs(const Measurement& meas, double dt) const;
   void runFeedback(const Measurement& meas, double dt, Output& raw);
+  /// The landing control's offsets (raw.landing_height) from the feet's normal forces fz.
+  void landing(const std::array<double, 2>& fz, double dt, Output& raw);
 
   Params params_;
   Reference ref_{};
@@ -142,6 +147,11 @@ class Stabilizer {
   Eigen::Vector2d dcm_integral_ = Eigen::Vector2d::Zero();
   Eigen::Vector2d com_offset_vel_ = Eigen::Vector2d::Zero();
   bool from_hold_ = false;  ///< ramping out from a frozen output
+  /// Per foot: the reference has had the foot in the air (so its contact is a touchdown), and the
+  /// time since the reference's last touchdown.
+  std::array<bool, 2> swung_{{false, false}};
+  std::array<bool, 2> found_{{false, false}};  ///< the ground met since the touchdown
+  std::array<double, 2> since_touchdown_{{0.0, 0.0}};
 };
 
 }  // namespace overstep::stabilizer
