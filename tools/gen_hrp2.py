@@ -288,6 +288,12 @@ def yaml():
     y.append("stabilizer:")
     for key, val, comment in (
             ("feedback", "lipm", "lipm (Kajita 2010) or dcm (Caron 2019)"),
+            # The plan's whole-body ZMP (its contact wrenches, with the angular momentum of the
+            # whole-body motion), without the Tp x ZMP-rate feed-forward (that ZMP steps at the
+            # contact switches): the stance CoPs stay within 3-7 mm of the plan's at p95, against
+            # 10-17 mm with the table-cart ZMP and its feed-forward (docs/runtime.md).
+            ("zmp_reference", "wholebody", "wholebody or tablecart (HRP-2's own stabilizer)"),
+            ("zmp_feedforward", "0.0", "fraction of Tp x ZMP rate added to the command"),
             ("zmp_delay", "0.05", "s, first-order lag of the realised ZMP (Kajita: 0.04-0.055)"),
             ("lipm_poles", "[2.5, 4.0, 12.0]", "1/s, closed-loop decay rates of the LIPM law"),
             ("dcm_kp", "4.0", "1/s (HRP-2Kai in mc_rtc: 4)"),
@@ -310,7 +316,8 @@ def yaml():
             ("max_foot_height", "0.02", "m"),
             # Landing: the simulated soles reach the ground 1.5 mm above the plan's, ~115 ms
             # after their planned touchdowns; lowering a late foot at F_d / (4000 N s/m) cut the
-            # contact losses from 58 to 14 on both plans x 3 seeds (docs/runtime.md).
+            # contact losses from 58 to 13 on both plans x 3 seeds (table-cart reference;
+            # docs/runtime.md).
             ("landing_damping", "4000.0", "N s/m, landing control D (0 = off)"),
             ("landing_time", "0.5", "s after a planned touchdown"),
             ("landing_search_depth", "0.015", "m, deepest a late foot is lowered"),

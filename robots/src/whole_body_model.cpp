@@ -22,6 +22,46 @@
 namespace overstep::robots {
 namespace {
 
+/// Each collision and visual shape of `link` with finite, positive sizes: DART asserts on a box,
+/// sphere or cylinder of size <= 0 (an abort; found by fuzz_robot's long run), and a mesh's scale
+/// must be finite.
+void checkShapes(const std::string& path, const std::string& name, const urdf::Link& link) {
+  auto check = [&](const urdf::GeometrySharedPtr& g, const char* what) {
+    if (!g) return;
+    auto bad = [&](const std::string& size) {
+      throw InputError(path + ": link '" + name + "' " + what + " " + size +
+                       ": expected finite and > 0");
+    };
+    auto ok = [](double v) { return std::isfinite(v) && v > 0.0 && v <= 1e3; };
+    switch (g->type) {
+      case urdf::Geometry::BOX: {
+        const auto& b = static_cast<const urdf::Box&>(*g).dim;
+        if (!ok(b.x) || !ok(b.y) || !ok(b.z)) bad("box size");
+        break;
+      }
+      case urdf::Geometry::SPHERE:
+        if (!ok(static_cast<const urdf::Sphere&>(*g).radius)) bad("sphere radius");
+        break;
+      case urdf::Geometry::CYLINDER: {
+        const auto& c = static_cast<const urdf::Cylinder&>(*g);
+        if (!ok(c.radius) || !ok(c.length)) bad("cylinder size");
+        break;
+      }
+      case urdf::Geometry::MESH: {
+        const auto& sc = static_cast<const urdf::Mesh&>(*g).scale;
+        if (!ok(std::abs(sc.x)) || !ok(std::abs(sc.y)) || !ok(std::abs(sc.z))) bad("mesh scale");
+        break;
+      }
+    }
+  };
+  for (const auto& c : link.collision_array)
+    if (c) check(c->geometry, "collision");
+  if (link.collision) check(link.collision->geometry, "collision");
+  for (const auto& v : link.visual_array)
+    if (v) check(v->geometry, "visual");
+  if (link.visual) check(link.visual->geometry, "visual");
+}
+
 using dart::dynamics::BodyNode;
 using dart::dynamics::Frame;
 using dart::dynamics::SkeletonPtr;
@@ -220,6 +260,7 @@ void validateUrdf(const core::RobotDescription& d, const std::string& urdf_text)
     if (!I.allFinite() || es.eigenvalues().minCoeff() <= 0.0) {
       throw InputError(path + ": link '" + name + "' inertia: expected positive definite");
     }
+    checkShapes(path, name, *link);
   }
   for (const auto& f : d.frames) {
     if (!model->getLink(f.link)) {

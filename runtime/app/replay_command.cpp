@@ -407,7 +407,7 @@ class ReplayProcess {
     m.fault_reason = out.stab_status.ok() ? "" : stabilizer::toString(out.stab_status.fault);
     m.saturations = static_cast<int32_t>(out.stab_status.saturation);
     for (int i = 0; i < 2; ++i) {
-      m.zmp_reference[i] = s.ref.zmp(i);
+      m.zmp_reference[i] = out.stab.zmp_reference(i);
       m.zmp_measured[i] = out.stab.zmp_measured(i);
       m.zmp_command[i] = out.stab.zmp_desired(i);
       m.com_error[i] = out.stab.com_error(i);

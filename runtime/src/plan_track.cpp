@@ -122,6 +122,7 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
   zmp_ = plan.zmp_tablecart;
   zmp_wb_ = plan.zmp_wholebody;
   zmp_vel_.setZero(2, N);
+  zmp_wb_vel_.setZero(2, N);
   imu_quat_.resize(4, N);
   imu_omega_.resize(3, N);
   base_pos_.resize(3, N);
@@ -148,6 +149,7 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
     const Eigen::Vector3d pb = model.framePose(base).translation();
     base_pos_.col(k) = pb;
     if (k > 0) zmp_vel_.col(k) = (zmp_.col(k) - zmp_.col(k - 1)) * rate_;
+    if (k > 0) zmp_wb_vel_.col(k) = (zmp_wb_.col(k) - zmp_wb_.col(k - 1)) * rate_;
     const Eigen::MatrixXd Jc = model.comJacobian();
     for (int f = 0; f < 2; ++f) {
       const Eigen::Isometry3d Xs = model.framePose(sole[f]);
@@ -181,6 +183,7 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
     }
   }
   if (N > 1) zmp_vel_.col(0) = zmp_vel_.col(1);
+  if (N > 1) zmp_wb_vel_.col(0) = zmp_wb_vel_.col(1);
   model_ = std::make_unique<robots::WholeBodyModel>(model);
   q0_ = plan.q.col(0);
   sole_frame_[0] = sole[0];
@@ -302,6 +305,8 @@ void PlanTrack::sample(double t, TrackSample& out) const {
   r.com_acc = lerp(com_acc_.col(k), com_acc_.col(k1));
   r.zmp = lerp(zmp_.col(k), zmp_.col(k1));
   r.zmp_vel = lerp(zmp_vel_.col(k), zmp_vel_.col(k1));
+  r.zmp_wholebody = lerp(zmp_wb_.col(k), zmp_wb_.col(k1));
+  r.zmp_wholebody_vel = lerp(zmp_wb_vel_.col(k), zmp_wb_vel_.col(k1));
   r.ground_z = 0.0;
   for (int f = 0; f < 2; ++f) {
     auto& fr = r.foot[static_cast<std::size_t>(f)];

@@ -112,6 +112,13 @@ Params loadParams(const std::string& robot_yaml) {
         p.feedback = v == "lipm" ? Feedback::Lipm : Feedback::Dcm;
         continue;
       }
+      if (key == "zmp_reference") {
+        const std::string v = r.as<std::string>(kv.second, where);
+        if (v != "tablecart" && v != "wholebody")
+          r.fail(where, "expected tablecart or wholebody, got '" + v + "'");
+        p.zmp_reference = v == "tablecart" ? ZmpReference::TableCart : ZmpReference::WholeBody;
+        continue;
+      }
       if (key == "lipm_poles") {
         const Eigen::Vector3d l = r.vector<3>(kv.second, where);
         p.lipm_poles = {l(0), l(1), l(2)};

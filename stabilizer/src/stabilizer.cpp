@@ -186,8 +186,9 @@ Fault Stabilizer::validateInputs(const Measurement& m, double dt) const {
   if (!(dt > 0.0 && dt <= params_.max_dt)) return Fault::BadTimeStep;
   const Reference& r = ref_;
   bool ok = finiteFixed(r.com) && finiteFixed(r.com_vel) && finiteFixed(r.com_acc) &&
-            finiteFixed(r.zmp) && finiteFixed(r.zmp_vel) && std::isfinite(r.ground_z) &&
-            finiteQuat(r.torso) && r.com.z() - r.ground_z > 0.05;
+            finiteFixed(r.zmp) && finiteFixed(r.zmp_vel) && finiteFixed(r.zmp_wholebody) &&
+            finiteFixed(r.zmp_wholebody_vel) && std::isfinite(r.ground_z) && finiteQuat(r.torso) &&
+            r.com.z() - r.ground_z > 0.05;
   for (const auto& f : r.foot) ok = ok && finitePose(f.pose) && finiteFixed(f.wrench);
   if (!ok) return Fault::NonFiniteReference;
   if (!r.foot[0].contact && !r.foot[1].contact) return Fault::NoSupport;
@@ -250,25 +251,29 @@ void Stabilizer::runFeedback(const Measurement& m, double dt, Output& o) {
     fz[f] = m.foot_wrench[f](5);
     if (fz[f] > 0.0) w_sum += core::transformWrench(m.foot_pose[f], m.foot_wrench[f]);
   }
+  const bool whole_body = p.zmp_reference == ZmpReference::WholeBody;
+  const Eigen::Vector2d& zmp_ref = whole_body ? r.zmp_wholebody : r.zmp;
+  const Eigen::Vector2d& zmp_ref_vel = whole_body ? r.zmp_wholebody_vel : r.zmp_vel;
+  o.zmp_reference = zmp_ref;
   const bool have_zmp = w_sum(5) > p.contact_force;
-  o.zmp_measured = have_zmp ? core::zmpFromWrench(w_sum, r.ground_z) : r.zmp;
+  o.zmp_measured = have_zmp ? core::zmpFromWrench(w_sum, r.ground_z) : zmp_ref;
   if (!have_zmp) sat |= kNoMeasuredZmp;
 
   o.com_error = (m.com - r.com).head<2>();
   o.com_vel_error = (m.com_vel - r.com_vel).head<2>();
-  o.zmp_error = o.zmp_measured - r.zmp;
+  o.zmp_error = o.zmp_measured - zmp_ref;
   o.dcm_error = o.com_error + o.com_vel_error / omega;
 
   // 1. CoM feedback -> desired ZMP.
   Eigen::Vector2d u;
   if (p.feedback == Feedback::Lipm) {
     o.gains = gainsFromPoles(p.lipm_poles, omega, p.zmp_delay);
-    u = r.zmp + p.zmp_feedforward * p.zmp_delay * r.zmp_vel + o.gains[0] * o.com_error +
+    u = zmp_ref + p.zmp_feedforward * p.zmp_delay * zmp_ref_vel + o.gains[0] * o.com_error +
         o.gains[1] * o.com_vel_error + o.gains[2] * o.zmp_error;
   } else {
     dcm_integral_ += (o.dcm_error - dcm_integral_ / p.dcm_integral_time) * dt;
     o.gains = {1.0 + p.dcm_kp / omega, p.dcm_ki / omega, 0.0};
-    u = r.zmp + p.zmp_feedforward * p.zmp_delay * r.zmp_vel + o.gains[0] * o.dcm_error +
+    u = zmp_ref + p.zmp_feedforward * p.zmp_delay * zmp_ref_vel + o.gains[0] * o.dcm_error +
         o.gains[1] * dcm_integral_;
   }
 

@@ -66,21 +66,23 @@ TEST_F(DemoLcm, SmallObstacleRunWritesAConsistentVerdict) {
     EXPECT_GT(s["right_heel_x"].get<double>(), s["obstacle_x"][1].get<double>());
     EXPECT_GT(s["left_heel_x"].get<double>(), s["obstacle_x"][1].get<double>());
   }
-  // Execution fidelity (issue 19), from the recorded sensor readings: on this bar the landing
-  // control leaves at most one contact loss per foot (6 / 5 without it), touchdown loads within
-  // 1.3 x the weight, no chatter, the stance CoPs near the plan's and the robot still at the end
-  // (measured, seeds 1-3: losses 1 / 0, loads <= 1.11, CoP p95 <= 11.6 mm, pelvis <= 5.3 mrad,
-  // static at once; docs/runtime.md).
+  // Execution fidelity (issue 19), from the recorded sensor readings: with the whole-body ZMP
+  // reference and the landing control the stance CoPs stay on the plan's, touchdown loads within
+  // 1.3 x the weight, no chatter, the robot still at the end (measured, seeds 1-3: losses 1-2 /
+  // 1-4, loads <= 1.14, CoP p95 <= 6.7 mm and max <= 31 mm, pelvis <= 1.3 mrad, static at once;
+  // with the table-cart reference and no landing control: losses 6 / 5, CoP p95 12.5 mm, max
+  // 65 mm, 0.9 s to settle; docs/runtime.md).
   ASSERT_TRUE(v.contains("fidelity")) << v.dump();
   const json& fid = v["fidelity"];
   for (const char* side : {"right", "left"}) {
     const json& f = fid["feet"][side];
-    EXPECT_LE(f["contact_losses"]["value"].get<double>(), 2.0) << side;
+    EXPECT_LE(f["contact_losses"]["value"].get<double>(), 4.0) << side;
     EXPECT_LE(f["peak_touchdown_load"]["value"].get<double>(), 1.3) << side;
     EXPECT_LE(f["chatter_rms"]["value"].get<double>(), 0.3) << side;
-    EXPECT_LE(f["cop_deviation_p95"]["value"].get<double>(), 0.015) << side;
+    EXPECT_LE(f["cop_deviation_p95"]["value"].get<double>(), 0.010) << side;
+    EXPECT_LE(f["cop_deviation_max"]["value"].get<double>(), 0.040) << side;
   }
-  EXPECT_LE(fid["pelvis_deviation_max"]["value"].get<double>(), 0.010);
+  EXPECT_LE(fid["pelvis_deviation_max"]["value"].get<double>(), 0.005);
   EXPECT_LE(fid["settling_time"]["value"].get<double>(), 1.0);
   // A second run with the same inputs reuses the cached plan: no planning.
   const auto again = test::runOverstep(smallBar() + " --allow-invalid-plan --json --timeout 60 " +

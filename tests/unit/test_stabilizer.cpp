@@ -562,6 +562,38 @@ TEST(StabilizerLanding, TheOffsetFollowsTheLaw) {
   EXPECT_EQ(out.landing_height[0], 0.0);
 }
 
+// Issue 19: a plan whose whole-body motion carries angular momentum has a whole-body ZMP away
+// from its table-cart ZMP (here 3 cm forward: an arm swing's momentum rate). With the table-cart
+// reference the stabilizer drives the measured ZMP to the table-cart point, i.e. 3 cm off the
+// plan's contact wrenches; with the whole-body reference, at zero CoM error, it commands the
+// whole-body point and leaves a robot that realises the plan's wrenches alone.
+TEST(StabilizerReference, TheWholeBodyModeAimsAtThePlansContactWrenchesNotTheTableCart) {
+  const auto feet = feetAt(0.1);
+  st::Reference ref = overstep::test::staticReference(Eigen::Vector2d::Zero(), feet);
+  ref.zmp_wholebody = Eigen::Vector2d(0.03, 0.0);
+  const st::Measurement on_plan = overstep::test::measurementWithZmp(
+      ref.com, Eigen::Vector3d::Zero(), ref.zmp_wholebody, feet, 0);
+  for (const auto mode : {st::ZmpReference::TableCart, st::ZmpReference::WholeBody}) {
+    st::Params p = overstep::test::plantParams();
+    p.zmp_reference = mode;
+    st::Stabilizer s(p);
+    bringOn(s, ref);
+    st::Output out;
+    s.step(on_plan, kDt, out);
+    const Eigen::Vector2d aim = mode == st::ZmpReference::WholeBody ? ref.zmp_wholebody : ref.zmp;
+    EXPECT_TRUE(out.zmp_reference.isApprox(aim)) << out.zmp_reference.transpose();
+    if (mode == st::ZmpReference::WholeBody) {
+      // The measured ZMP is the plan's: no ZMP error, the command is the plan's point.
+      EXPECT_NEAR(out.zmp_error.norm(), 0.0, 1e-9);
+      EXPECT_NEAR((out.zmp_desired - ref.zmp_wholebody).norm(), 0.0, 1e-6);
+    } else {
+      // The table-cart mode sees a 3 cm error and commands a ZMP behind the plan's.
+      EXPECT_NEAR(out.zmp_error.x(), 0.03, 1e-9);
+      EXPECT_LT(out.zmp_desired.x(), ref.zmp_wholebody.x() - 1e-3);
+    }
+  }
+}
+
 TEST(StabilizerFaults, NanInputGivesAFaultAndHoldsTheLastOutput) {
   st::Params p = overstep::test::plantParams();
   const auto feet = feetAt(0.1);

@@ -424,6 +424,20 @@ TEST(BadRobotFiles, NegativeLinkMass) {
 
 TEST(BadRobotFiles, MalformedUrdf) { expectModelError("</robot>", "</robt>", "malformed URDF"); }
 
+// Issue 20, found by fuzz_robot's long run (seed 27): a shape of size 0 reached DART's BoxShape
+// assertion (the process aborted); every shape size is checked first.
+TEST(BadRobotFiles, ShapesOfSizeZeroAreBadInputNotAnAbort) {
+  expectModelError(
+      "<collision><origin xyz=\"0 0 0.08\" rpy=\"0 0 0\"/><geometry><box "
+      "size=\"0.2 0.24 0.22\"/>",
+      "<collision><origin xyz=\"0 0 0.08\" rpy=\"0 0 0\"/><geometry><box "
+      "size=\"0.2 0 0.22\"/>",
+      "collision box size: expected finite and > 0");
+  expectModelError("<cylinder radius=\"0.045\" length=\"0.08\"/>",
+                   "<cylinder radius=\"-0.045\" length=\"0.08\"/>",
+                   "cylinder size: expected finite and > 0");
+}
+
 }  // namespace
 }  // namespace overstep::robots
 

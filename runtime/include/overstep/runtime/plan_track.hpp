@@ -110,7 +110,7 @@ class PlanTrack {
   Eigen::VectorXi phase_;
   std::vector<std::array<bool, 2>> contact_;
   Eigen::MatrixXd q_, qd_;  ///< joints x N
-  Eigen::MatrixXd com_, com_vel_, com_acc_, zmp_, zmp_vel_, zmp_wb_;
+  Eigen::MatrixXd com_, com_vel_, com_acc_, zmp_, zmp_vel_, zmp_wb_, zmp_wb_vel_;
   Eigen::MatrixXd sole_pose_[2];  ///< 7 x N [x y z qw qx qy qz]
   Eigen::MatrixXd wrench_[2];     ///< 6 x N [M; F] sole frame
   Eigen::MatrixXd imu_quat_, imu_omega_, base_pos_;

@@ -16,6 +16,13 @@ enum class Feedback {
   Dcm,   ///< Caron 2019: DCM proportional + leaky-integral feedback
 };
 
+/// Which of the plan's ZMPs the CoM feedback and the distributor aim at.
+enum class ZmpReference {
+  TableCart,  ///< the table-cart (LIPM) ZMP of the planned CoM motion (HRP-2's stabilizer)
+  WholeBody,  ///< the plan's whole-body ZMP: its contact wrenches, with the centroidal angular
+              ///< momentum the whole-body motion carries
+};
+
 /// A sole rectangle in its sole frame (x forward, y left), m.
 struct Sole {
   double x_min = -0.10, x_max = 0.13, y_min = -0.075, y_max = 0.056;
@@ -29,6 +36,7 @@ struct Params {
 
   // ---- CoM feedback
   Feedback feedback = Feedback::Lipm;
+  ZmpReference zmp_reference = ZmpReference::TableCart;  ///< YAML: tablecart or wholebody
   double zmp_delay = 0.05;  ///< s, first-order lag of the realised ZMP behind the command (Tp)
   /// 1/s, closed-loop decay rates (-poles) of the CoM-ZMP-lag error dynamics for the LIPM law;
   /// the gains follow from the CoM height each tick (gainsFromPoles). The defaults give

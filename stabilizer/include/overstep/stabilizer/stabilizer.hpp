@@ -66,6 +66,10 @@ struct Reference {
   Eigen::Vector3d com_acc = Eigen::Vector3d::Zero();
   Eigen::Vector2d zmp = Eigen::Vector2d::Zero();      ///< table-cart ZMP
   Eigen::Vector2d zmp_vel = Eigen::Vector2d::Zero();  ///< its rate (feed-forward through the lag)
+  /// The plan's whole-body ZMP (from its contact wrenches) and its rate; used instead of the two
+  /// above with Params::zmp_reference = WholeBody.
+  Eigen::Vector2d zmp_wholebody = Eigen::Vector2d::Zero();
+  Eigen::Vector2d zmp_wholebody_vel = Eigen::Vector2d::Zero();
   double ground_z = 0.0;
   std::array<FootReference, 2> foot{};
   Eigen::Quaterniond torso = Eigen::Quaterniond::Identity();
@@ -89,10 +93,11 @@ struct Output {
   Eigen::Vector2d body_attitude = Eigen::Vector2d::Zero();  ///< rad, torso roll, pitch
 
   // telemetry
-  double ramp = 0.0;                                       ///< 0..1, feedback scale in use
-  Eigen::Vector2d zmp_desired = Eigen::Vector2d::Zero();   ///< after clamping (world)
-  Eigen::Vector2d zmp_measured = Eigen::Vector2d::Zero();  ///< from the foot wrenches
-  Eigen::Vector2d com_error = Eigen::Vector2d::Zero();     ///< measured - reference
+  double ramp = 0.0;                                        ///< 0..1, feedback scale in use
+  Eigen::Vector2d zmp_reference = Eigen::Vector2d::Zero();  ///< the plan's ZMP in use (world)
+  Eigen::Vector2d zmp_desired = Eigen::Vector2d::Zero();    ///< after clamping (world)
+  Eigen::Vector2d zmp_measured = Eigen::Vector2d::Zero();   ///< from the foot wrenches
+  Eigen::Vector2d com_error = Eigen::Vector2d::Zero();      ///< measured - reference
   Eigen::Vector2d com_vel_error = Eigen::Vector2d::Zero();
   Eigen::Vector2d dcm_error = Eigen::Vector2d::Zero();
   Eigen::Vector2d zmp_error = Eigen::Vector2d::Zero();  ///< measured - reference
