@@ -274,8 +274,8 @@ json identifyLoop(const DemoOptions& o, const fs::path& run) {
   o2.sim_robot =
       o.sim_robot.empty() ? o.robot : o.sim_robot;  // the simulated robot stays what it is
   // The same motion re-solved for the identified model: a plan from scratch for another model
-  // can be another motion (5 cm bar, session 6: 6.79 s instead of 6.37 s), which says nothing
-  // about the model.
+  // can be another motion (measured on the 5 cm bar: 6.79 s instead of 6.37 s), which says
+  // nothing about the model.
   o2.warm_start = (run / "before" / "plan.json").string();
   const json after = demoRun(o2, run / "after");
   out["after"] = after;

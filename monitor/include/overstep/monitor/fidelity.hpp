@@ -38,7 +38,7 @@ struct RunSeries {
   std::vector<double> base_speed;                     ///< m/s, NaN where not measured
   std::vector<Eigen::Vector2d> tilt_plan, tilt_meas;  ///< pelvis [roll, pitch], rad
 
-  /// Ticks held; InputError-free: a size mismatch is a programming error (assert).
+  /// Ticks held (every series has this length: resize() sets them all).
   std::size_t size() const { return t.size(); }
   void resize(std::size_t n);
 };
