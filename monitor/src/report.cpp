@@ -125,6 +125,8 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
     leg[static_cast<std::size_t>(i)] =
         chains[static_cast<std::size_t>(i / 6)].actuated[static_cast<std::size_t>(i % 6)];
   const int base_frame = model.frameIndex(d.base_link);
+  const int sole_frame[2] = {model.frameIndex(d.feet[0].sole_frame),
+                             model.frameIndex(d.feet[1].sole_frame)};
   std::vector<int> cap_frames;
   for (const auto& c : d.capsules) cap_frames.push_back(model.frameIndex(c.link));
 
@@ -208,22 +210,26 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
       num(cm.y());
       csv += contact ? ",1" : ",0";
     }
-    for (int f = 0; f < 2; ++f) {
-      const core::FootDescription& fd = d.feet[static_cast<std::size_t>(f)];
-      const int sf = model.frameIndex(fd.sole_frame);
-      Eigen::VectorXd q = plan.q.col(k);
-      model.setPositions(q);
-      num(lowestCorner(model, fd, sf));
-      for (int e = 0; e < model.elasticCount(); ++e) q(model.elasticCoordinate(e)) = 0.0;
-      model.setPositions(q);
-      num(lowestCorner(model, fd, sf));
-      if (r.ground_truth) {
-        setMeasured(model, r, base_frame, qm);
-        num(lowestCorner(model, fd, sf));
-      } else {
-        num(std::numeric_limits<double>::quiet_NaN());
-      }
+    // Sole heights: each of the three postures once, both feet from it (columns per foot).
+    double sole_z[2][3];
+    auto soles = [&](int col) {
+      for (int f = 0; f < 2; ++f)
+        sole_z[f][col] = lowestCorner(model, d.feet[static_cast<std::size_t>(f)], sole_frame[f]);
+    };
+    Eigen::VectorXd q = plan.q.col(k);
+    model.setPositions(q);
+    soles(0);
+    for (int e = 0; e < model.elasticCount(); ++e) q(model.elasticCoordinate(e)) = 0.0;
+    model.setPositions(q);
+    soles(1);
+    if (r.ground_truth) {
+      setMeasured(model, r, base_frame, qm);
+      soles(2);
+    } else {
+      for (auto& z : sole_z) z[2] = std::numeric_limits<double>::quiet_NaN();
     }
+    for (const auto& z : sole_z)
+      for (const double v : z) num(v);
     for (int i = 0; i < 12; ++i) {
       const int a = leg[static_cast<std::size_t>(i)];
       num(plan.q(model.actuatedCoordinate(a), k));
