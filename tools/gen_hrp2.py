@@ -314,11 +314,12 @@ def yaml():
             # standing robot from one foot to the other within 0.5 s (docs/runtime.md).
             ("force_difference_gain", "0.0", "m/(N s), off (see gen_hrp2.py)"),
             ("max_foot_height", "0.02", "m"),
-            # Landing: the simulated soles reach the ground 1.5 mm above the plan's, ~115 ms
-            # after their planned touchdowns; lowering a late foot at F_d / (4000 N s/m) cut the
-            # contact losses from 58 to 13 on both plans x 3 seeds (table-cart reference;
-            # docs/runtime.md).
-            ("landing_damping", "4000.0", "N s/m, landing control D (0 = off)"),
+            # Landing: with the whole-body ZMP reference the soles meet the ground within
+            # 0.2 mm of the plan's (6-66 ms late); a fast search (F_d / 4000 N s/m, ~18 mm/s)
+            # drove them in and they rebounded (16 contact losses on both plans x 3 seeds),
+            # a slow one (F_d / 32000, ~2 mm/s) lands them gently: 4 losses, every CoP maximum
+            # within 30 mm (docs/runtime.md).
+            ("landing_damping", "32000.0", "N s/m, landing control D (0 = off)"),
             ("landing_time", "0.5", "s after a planned touchdown"),
             ("landing_search_depth", "0.015", "m, deepest a late foot is lowered"),
             ("posture_gain", "0.5", "1/s, body posture from the IMU"),

@@ -50,8 +50,11 @@ std::vector<std::pair<std::size_t, std::size_t>> segments(std::size_t n, Pred pr
 
 /// Contact losses in one planned-contact interval [i0, i1) of a foot, the interval widened back
 /// by `before` s to see an early contact: after the first measured contact (Fz above the on
-/// level), every stretch below the off level lasting at least `min_duration` is a loss; a foot
-/// that never makes contact is one loss.
+/// level), every stretch below the off level lasting at least `min_duration` while the plan
+/// loads the foot above the on level is a loss; a foot that never makes contact is one loss.
+/// Where the plan's own force is below the on level (its load ramping to zero before a lift-off,
+/// the look-back before a touchdown) the plan is not in contact by the same measure, and a
+/// measured foot off the ground there is a lift-off's timing, not a loss.
 int lossesIn(const RunSeries& run, const FootSeries& f, std::size_t i0, std::size_t i1,
              const FidelityParams& p) {
   const double on = p.contact_on * run.weight, off = p.contact_off * run.weight;
@@ -68,6 +71,7 @@ int lossesIn(const RunSeries& run, const FootSeries& f, std::size_t i0, std::siz
       in_contact = false;
       left_at = run.t[i];
     }
+    if (f.fz_plan[i] < on && !in_contact && left_at >= 0.0) left_at = run.t[i];
     // A dip counts once it has lasted min_duration (and it is counted once).
     if (ever && !in_contact && left_at >= 0.0 && run.t[i] - left_at >= p.loss_min_duration) {
       ++losses;

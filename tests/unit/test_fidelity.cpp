@@ -124,6 +124,27 @@ TEST(Fidelity, ABounceAfterTouchdownIsAContactLossAndAShortDipIsNot) {
   EXPECT_EQ(j["misses"][0], "right.contact_losses") << j.dump(1);
 }
 
+// The plan ramps a lifting foot's load to zero before its lift-off: a foot that leaves the ground
+// 40 ms early, where the plan asks less than the contact level (5 % of the weight), lifts off
+// early; the same 40 ms off the ground where the plan asks 100 N is a loss.
+TEST(Fidelity, AnEarlyLiftOffIsNotAContactLossButTheSameDipUnderPlannedLoadIs) {
+  auto ramped = [](double dip_start) {
+    RunSeries r = standing(3.0, 1.0);
+    swingRight(r, 1.0, 2.0);
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      const double t = r.t[i];
+      if (t < 0.8 || t >= 1.0) continue;
+      r.foot[0].fz_plan[i] = r.foot[0].fz_meas[i] = 100.0 * (1.0 - t) / 0.2;  // 100 N -> 0
+      r.foot[1].fz_plan[i] = r.foot[1].fz_meas[i] = kWeight - r.foot[0].fz_plan[i];
+    }
+    setMeasuredFz(r, 0, dip_start, dip_start + 0.04, 0.0);
+    return computeFidelity(r).foot[0].contact_losses;
+  };
+  // The plan's load is below 0.05 x 570 N = 28.5 N from t = 0.943 s on.
+  EXPECT_EQ(ramped(0.96), 0);
+  EXPECT_EQ(ramped(0.80), 1);
+}
+
 TEST(Fidelity, PeakTouchdownLoadIsTheLargestLoadAroundATouchdown) {
   RunSeries r = standing(3.0, 1.0);
   swingRight(r, 1.0, 2.0);
