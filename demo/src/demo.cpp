@@ -64,6 +64,16 @@ json readJson(const fs::path& p) {
   return json::parse(text, nullptr, false);
 }
 
+/// The last non-empty line of a child's log (its one-line error, when it failed on its input).
+std::string lastLine(const fs::path& p) {
+  const std::string text = readAll(p);
+  std::size_t end = text.find_last_not_of("\r\n");
+  if (end == std::string::npos) return "";
+  const std::size_t begin = text.rfind('\n', end);
+  return text.substr(begin == std::string::npos ? 0 : begin + 1,
+                     end - (begin == std::string::npos ? 0 : begin + 1) + 1);
+}
+
 }  // namespace
 
 json demoRun(const DemoOptions& o, const fs::path& run) {
@@ -177,6 +187,12 @@ json demoRun(const DemoOptions& o, const fs::path& run) {
   const int sim_code = stop(sim, SIGTERM, 10.0);
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
   stop(logger, SIGINT, 5.0);
+
+  // A child that refused its input (e.g. a stabilizer gain out of its range in --robot) names it.
+  if (replay_code == kExitBadInput)
+    throw InputError("the runtime refused the inputs: " + lastLine(run / "replay.log"));
+  if (sim_code == kExitBadInput)
+    throw InputError("the simulator refused the inputs: " + lastLine(run / "sim.log"));
 
   // ---- 3. verdict and execution fidelity (from the recorded log, as `overstep report`)
   RunReports reports;
