@@ -20,6 +20,7 @@
 #include "overstep/core/robot_description.hpp"
 #include "overstep/monitor/fidelity.hpp"
 #include "overstep/planner/version.hpp"
+#include "overstep/stabilizer/params.hpp"
 #include "process.hpp"
 
 namespace overstep::demo {
@@ -69,14 +70,17 @@ std::string lastLine(const fs::path& p) {
   const std::string text = readAll(p);
   std::size_t end = text.find_last_not_of("\r\n");
   if (end == std::string::npos) return "";
-  const std::size_t begin = text.rfind('\n', end);
-  return text.substr(begin == std::string::npos ? 0 : begin + 1,
-                     end - (begin == std::string::npos ? 0 : begin + 1) + 1);
+  const std::size_t newline = text.rfind('\n', end);
+  const std::size_t begin = newline == std::string::npos ? 0 : newline + 1;
+  return text.substr(begin, end + 1 - begin);
 }
 
 }  // namespace
 
 json demoRun(const DemoOptions& o, const fs::path& run) {
+  // The runtime reads the robot file's stabilizer section: a gain out of its range is refused
+  // here, before anything is planned or started.
+  (void)stabilizer::loadParams(o.robot);
   const std::string exe = selfExe();
   const fs::path cache =
       o.cache_dir.empty() ? fs::path(o.run_root) / "cache" : fs::path(o.cache_dir);

@@ -141,8 +141,8 @@ TEST_F(DemoLcm, BadInputIsExitTwo) {
     const auto r = test::runOverstep(args);
     EXPECT_EQ(r.code, 2) << args << "\n" << r.err;
   }
-  // A robot file whose stabilizer section the runtime refuses (a gain out of its range): exit 2
-  // with the runtime's own one-line reason, not an internal error.
+  // A robot file whose stabilizer section the runtime would refuse (a gain out of its range):
+  // exit 2 naming the key, before anything is planned or started.
   namespace fs = std::filesystem;
   test::TempDir dir;
   const std::string text = test::slurp(test::hrp2Yaml());
@@ -153,7 +153,6 @@ TEST_F(DemoLcm, BadInputIsExitTwo) {
   const fs::path robot = dir.file("hrp2.yaml");
   test::writeText(robot, text.substr(0, at) + key + " 0.0" + text.substr(eol));
   fs::copy_file(fs::path(test::hrp2Yaml()).parent_path() / "hrp2.urdf", dir.file("hrp2.urdf"));
-  // The planner ignores the stabilizer section: its best attempt after 1 s is replayed.
   const auto r = test::runOverstep(
       "demo --obstacle-height 0.05 --plan-time-limit 1 --allow-invalid-plan --no-report --robot " +
       robot.string() + " --cache-dir " + dir.file("cache") + " --run-root " + dir.file("runs"));
