@@ -36,6 +36,23 @@ struct CheckedPlan {
   core::Plan plan;
   planner::CheckReport report;
 };
+/// The target stage's polish stops at the first feasible point whose dense plan `overstep check`
+/// accepts (planOverstep's `accept`): the check, not a tenth of the rows' tolerance, is what
+/// makes a plan valid.
+planner::AcceptFn checkAccepts(planner::OverstepProblem& problem,
+                               const robots::WholeBodyModel& model, double rate, std::FILE* log) {
+  return [&problem, &model, rate, log](const Eigen::VectorXd& x) {
+    const planner::CheckReport report = planner::checkPlan(problem.toPlan(x, rate), model);
+    std::string over;
+    for (const auto& f : report.families)
+      if (!f.ok()) over += (over.empty() ? "" : ", ") + f.name;
+    std::fprintf(log, "-- the 1 kHz check of the polished point: %s%s\n",
+                 report.valid ? "valid" : "over in ", over.c_str());
+    std::fflush(log);
+    return report.valid;
+  };
+}
+
 planner::WorkAccount refineByCheck(planner::OverstepProblem& problem, planner::NlpSolver& solver,
                                    const planner::PlannerConfig& cfg, const core::ObstacleSpec& ob,
                                    const robots::WholeBodyModel& model, double rate, std::FILE* log,
@@ -83,7 +100,7 @@ planner::WorkAccount refineByCheck(planner::OverstepProblem& problem, planner::N
           std::fprintf(log, "-- %s\n", st.c_str());
           std::fflush(log);
         },
-        row, &cli::StopSignals::flag(), &from);
+        row, &cli::StopSignals::flag(), &from, checkAccepts(problem, model, rate, log));
     if (!again.valid) break;  // the first solution stays (and `checked` is its check)
     checked.reset();
     again.iterations += out.iterations;
@@ -236,7 +253,8 @@ int runPlan(const PlanOptions& o) {
           std::fprintf(log, "-- %s\n", s.c_str());
           std::fflush(log);
         },
-        row, &cli::StopSignals::flag(), warm.size() ? &warm : nullptr);
+        row, &cli::StopSignals::flag(), warm.size() ? &warm : nullptr,
+        checkAccepts(problem, model, o.rate, log));
     refined_work =
         refineByCheck(problem, *solver, cfg, ob, model, o.rate, log, row, out, last_check);
   }

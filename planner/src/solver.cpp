@@ -11,6 +11,9 @@ namespace {
 
 /// SLSQP iterations without a point 1 % nearer to feasibility that end an infeasible stage.
 constexpr int kInfeasibleStall = 80;
+/// SLSQP iterations without a better feasible objective (by 1e-4 relative) that end a feasible
+/// stage.
+constexpr int kFeasibleStall = 40;
 
 using Clock = std::chrono::steady_clock;
 
@@ -170,12 +173,12 @@ class NloptSolver final : public NlpSolver {
       s.last_iterate = s.x;
       if (s.self.on_iteration_) s.self.on_iteration_(info);
       // Stall: SLSQP can cycle between two iterates for hundreds of iterations (measured); stop
-      // a stage once the best feasible point has not improved for 40 iterations.
+      // a stage once the best feasible point has not improved for kFeasibleStall iterations.
       if (s.best_violation <= kFeasibilityTolerance) {
         if (s.best_objective < s.stall_reference - 1e-4 * std::abs(s.stall_reference)) {
           s.stall_reference = s.best_objective;
           s.stall_count = 0;
-        } else if (++s.stall_count >= 40) {
+        } else if (++s.stall_count >= kFeasibleStall) {
           s.stalled = true;
         }
       } else if (s.best_violation < s.infeasible_reference * 0.99) {
@@ -252,7 +255,8 @@ constexpr int kPolishIterations = 400;
 RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::VectorXd& x0,
                                      int max_iterations, const std::atomic<bool>* stop,
                                      const std::function<void(const IterationInfo&)>& on_iter,
-                                     double time_limit_s) {
+                                     double time_limit_s, const AcceptFn& accept,
+                                     double accept_below) {
   // Projected Levenberg-Marquardt on the violation residuals r = [max(0, g); h] (rows near
   // activity keep their Jacobians so the step does not break them). NLopt offers no
   // least-squares method; SLSQP started far from feasibility stalls (measured: docs/planner.md).
@@ -279,9 +283,18 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
   double lambda = 1e-3;
   Eigen::VectorXd grad;
   Eigen::MatrixXd jin, jeq;
+  int next_ask = 0, gap = 5;  // when `accept` is asked next (a step count), and then how often
   for (int it = 0; it < max_iterations; ++it) {
     const double viol = NloptSolver::maxViolation(e);
     if (viol <= 0.1 * kFeasibilityTolerance) break;
+    if (accept && viol <= accept_below && it >= next_ask) {
+      if (accept(x)) {
+        out.accepted = true;
+        break;
+      }
+      next_ask = it + gap;
+      gap *= 2;
+    }
     if (stop && stop->load()) {
       out.interrupted = true;
       break;
@@ -361,7 +374,8 @@ std::unique_ptr<NlpSolver> makeNloptSolver(const SolverSettings& settings,
 PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double time_limit_s,
                          const std::function<void(const std::string&)>& on_stage,
                          const std::function<void(const IterationInfo&)>& on_restore,
-                         const std::atomic<bool>* stop, const Eigen::VectorXd* warm_start) {
+                         const std::atomic<bool>* stop, const Eigen::VectorXd* warm_start,
+                         const AcceptFn& accept) {
   const auto start = Clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
   const WorkAccount work0 = problem.work();
@@ -376,10 +390,10 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
            (w1.evaluate_s - w0.evaluate_s) - (w1.derivatives_s - w0.derivatives_s);
     return result;
   };
-  auto restore = [&](const Eigen::VectorXd& from, int iterations) {
+  auto restore = [&](const Eigen::VectorXd& from, int iterations, const AcceptFn& take = {}) {
     return accounted(out.split.restoration, [&] {
       return restoreFeasibility(problem, from, iterations, stop, on_restore,
-                                time_limit_s - elapsed());
+                                time_limit_s - elapsed(), take);
     });
   };
   const PlannerConfig& cfg = problem.config();
@@ -454,8 +468,11 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
       // SLSQP ends near, not always inside, the feasible set: polish with restoration steps
       // (they end at a tenth of the tolerance or when no step reduces the violations; on the
       // 20 cm run 30 steps ended at 0.013 and 150 at 0.0137, still descending; measured,
-      // docs/planner.md).
-      const RestorationResult polish = restore(x, kPolishIterations);
+      // docs/planner.md). The target stage's polish may stop at the first feasible point the
+      // caller's finer measure takes (on the default: the last 396 of its 400 steps went from
+      // 0.0096 to 0.0073 without `accept`).
+      const bool target = i + 1 == stages.size();
+      const RestorationResult polish = restore(x, kPolishIterations, target ? accept : AcceptFn{});
       out.iterations += polish.iterations;
       x = polish.x;
       problem.evaluate(x, out.final.evaluation);

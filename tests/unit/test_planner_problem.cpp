@@ -83,6 +83,48 @@ TEST_F(Problem, RestorationStopsAtItsTimeLimit) {
   EXPECT_LT(some.max_violation, v0);
 }
 
+// The restoration's `accept` (the plan command passes the 1 kHz check): asked only at iterates
+// within its violation level (here 0.5, which the guess's restoration reaches in a few steps; the
+// planner uses the feasibility tolerance), then after 5, 10, ... more steps; an iterate it
+// refuses changes nothing (the same steps, bit for bit, as without it); the first one it takes
+// ends the restoration there.
+TEST_F(Problem, RestorationStopsWhereAcceptTakesAPoint) {
+  OverstepProblem& p = *raw_;
+  constexpr int kSteps = 25;
+  constexpr double kLevel = 0.5;
+  const auto inf = std::numeric_limits<double>::infinity();
+  const RestorationResult plain = restoreFeasibility(p, *x_, kSteps, nullptr, nullptr);
+  std::vector<Eigen::VectorXd> asked;
+  std::vector<int> asked_at;  // restoration steps taken before each question
+  int steps = 0;
+  const auto count = [&](const IterationInfo& i) { steps = i.iteration; };
+  const AcceptFn refuse = [&](const Eigen::VectorXd& x) {
+    Evaluation e;
+    p.evaluate(x, e);
+    EXPECT_LE(std::max(e.ineq.maxCoeff(), e.eq.cwiseAbs().maxCoeff()), kLevel);
+    asked.push_back(x);
+    asked_at.push_back(steps);
+    return false;
+  };
+  const RestorationResult refused =
+      restoreFeasibility(p, *x_, kSteps, nullptr, count, inf, refuse, kLevel);
+  ASSERT_GE(asked.size(), 2u) << "the restoration ended at " << plain.max_violation;
+  for (std::size_t i = 1; i < asked_at.size(); ++i)
+    EXPECT_EQ(asked_at[i] - asked_at[i - 1], 5 << (i - 1)) << i;
+  EXPECT_FALSE(refused.accepted);
+  EXPECT_EQ(refused.iterations, plain.iterations);
+  EXPECT_EQ(refused.x, plain.x);
+  int calls = 0;
+  const AcceptFn take = [&](const Eigen::VectorXd&) { return ++calls > 0; };
+  const RestorationResult taken =
+      restoreFeasibility(p, *x_, kSteps, nullptr, nullptr, inf, take, kLevel);
+  EXPECT_TRUE(taken.accepted);
+  EXPECT_EQ(calls, 1);
+  EXPECT_EQ(taken.x, asked.front());
+  EXPECT_EQ(taken.iterations, asked_at.front());
+  EXPECT_LE(taken.max_violation, kLevel);
+}
+
 TEST_F(Problem, LayoutAndRowFamiliesAreConsistent) {
   const auto& lay = problem_->layout();
   EXPECT_EQ(lay.total, 5 + 6 + 16 * lay.free_cp);

@@ -78,23 +78,35 @@ struct RestorationResult {
   double max_violation = 0.0;
   bool interrupted = false;
   bool timed_out = false;  ///< stopped by its time limit
+  bool accepted = false;   ///< stopped because `accept` took a feasible iterate
 };
+
+/// Judges a feasible solution vector by a finer measure than the rows at the samples (e.g. the
+/// plan's 1 kHz check); true: good enough to stop at.
+using AcceptFn = std::function<bool(const Eigen::VectorXd&)>;
 
 /// Drives x toward feasibility (least squares on the violations, bounds respected). Stops after
 /// `max_iterations` steps, on `stop`, or once `time_limit_s` of wall time has passed (checked
-/// before each step; <= 0: no step at all).
+/// before each step; <= 0: no step at all). Without `accept` it aims at a tenth of
+/// kFeasibilityTolerance; with it, it also stops at the first iterate within `accept_below`
+/// (scaled violation; by default the feasibility tolerance) that `accept` takes (asked at the
+/// first such iterate, then after 5, 10, 20, ... more steps); asking changes no step.
 RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::VectorXd& x0,
                                      int max_iterations, const std::atomic<bool>* stop,
                                      const std::function<void(const IterationInfo&)>& on_iter,
-                                     double time_limit_s = std::numeric_limits<double>::infinity());
+                                     double time_limit_s = std::numeric_limits<double>::infinity(),
+                                     const AcceptFn& accept = {},
+                                     double accept_below = kFeasibilityTolerance);
 
 /// Runs the homotopy from the kinematic guess (after a feasibility restoration) to the target
 /// obstacle and CoP box; with `warm_start` (a solution vector of this problem's layout, e.g. a
-/// plan file's summary.x) only the target stage runs, from there.
+/// plan file's summary.x) only the target stage runs, from there. `accept` (optional) ends the
+/// restoration that polishes the target stage at the first feasible point it takes, instead of
+/// at a tenth of the tolerance (restoreFeasibility).
 PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double time_limit_s,
                          const std::function<void(const std::string&)>& on_stage,
                          const std::function<void(const IterationInfo&)>& on_restore,
-                         const std::atomic<bool>* stop,
-                         const Eigen::VectorXd* warm_start = nullptr);
+                         const std::atomic<bool>* stop, const Eigen::VectorXd* warm_start = nullptr,
+                         const AcceptFn& accept = {});
 
 }  // namespace overstep::planner
