@@ -100,9 +100,11 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
 
 /// Runs the homotopy from the kinematic guess (after a feasibility restoration) to the target
 /// obstacle and CoP box; with `warm_start` (a solution vector of this problem's layout, e.g. a
-/// plan file's summary.x) only the target stage runs, from there. `accept` (optional) ends the
-/// restoration that polishes the target stage at the first feasible point it takes, instead of
-/// at a tenth of the tolerance (restoreFeasibility).
+/// plan file's summary.x) x is first restored onto this problem's feasible set; when `accept`
+/// takes a restored point that point is the result (status "projected"), else the target stage
+/// runs from there. `accept` (optional) also ends the restoration that polishes the target
+/// stage at the first feasible point it takes, instead of at a tenth of the tolerance
+/// (restoreFeasibility).
 PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double time_limit_s,
                          const std::function<void(const std::string&)>& on_stage,
                          const std::function<void(const IterationInfo&)>& on_restore,
