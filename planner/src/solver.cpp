@@ -394,6 +394,14 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
                                 time_limit_s - elapsed(), take);
     });
   };
+  // The result is x itself (no stage solve ended the plan).
+  auto endAt = [&](const Eigen::VectorXd& x, const char* status) {
+    out.final.x = x;
+    problem.evaluate(x, out.final.evaluation);
+    out.final.objective = out.final.evaluation.objective;
+    out.final.max_violation = NloptSolver::maxViolation(out.final.evaluation);
+    out.final.status = status;
+  };
   const PlannerConfig& cfg = problem.config();
   const double target_h = problem.obstacle().height;
   std::vector<double> boxes = cfg.cop_homotopy;
@@ -428,11 +436,7 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
       // with a 1.5 kg chest payload: 34 of the re-plan's 46 s; docs/planner.md).
       if (on_stage) on_stage("warm start: the restored point passes the check; no stage solve");
       stages.clear();
-      problem.evaluate(x, out.final.evaluation);
-      out.final.x = x;
-      out.final.objective = out.final.evaluation.objective;
-      out.final.max_violation = rest.max_violation;
-      out.final.status = "projected";
+      endAt(x, "projected");
     }
   } else {
     problem.setDifficulty(stages.front().first, stages.front().second, stages.size() == 1);
@@ -493,13 +497,7 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
       if (polish.timed_out) out.final.status = "time_limit";
     }
   }
-  if (out.final.x.size() == 0) {  // the time limit ended the solve before any stage ran
-    out.final.x = x;
-    problem.evaluate(x, out.final.evaluation);
-    out.final.objective = out.final.evaluation.objective;
-    out.final.max_violation = NloptSolver::maxViolation(out.final.evaluation);
-    out.final.status = "time_limit";
-  }
+  if (out.final.x.size() == 0) endAt(x, "time_limit");  // no stage ran before the time limit
   out.solve_time = elapsed();
   const WorkAccount& work1 = problem.work();
   out.split.evaluations = work1.evaluate_s - work0.evaluate_s;
