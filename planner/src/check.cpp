@@ -208,7 +208,7 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
       wc[c] = {Xc * d.capsules[c].p0, Xc * d.capsules[c].p1, d.capsules[c].radius};
     }
     for (int c : leg_caps)
-      obst.add(-robots::obstacleDistance(wc[static_cast<std::size_t>(c)], og), t,
+      obst.add(-robots::obstacleDistanceFcl(wc[static_cast<std::size_t>(c)], og), t,
                d.capsules[static_cast<std::size_t>(c)].link);
     for (const auto& [a2, b2] : pairs)
       self.add(-robots::capsuleDistance(wc[static_cast<std::size_t>(a2)],

@@ -5,7 +5,9 @@
 #include <fcl/narrowphase/distance.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 
 namespace overstep::robots {
 namespace {
@@ -77,6 +79,79 @@ double segmentDistance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
   return (*cp - *cq).norm();
 }
 
+/// Squared distance from the segment p0 + s d (s in [0, 1]) to the box [-h, h] (box frame),
+/// minimised exactly: it is a convex, piecewise-quadratic function of s whose pieces end where
+/// the segment crosses a slab plane x_i = +-h_i; on each piece every coordinate is either inside
+/// its slab (no contribution) or beyond one face, so the minimum of each piece is closed form.
+double segmentBoxSquaredDistance(const Eigen::Vector3d& p0, const Eigen::Vector3d& d,
+                                 const Eigen::Vector3d& h, double* s_min) {
+  std::array<double, 8> cut{};
+  int n = 0;
+  cut[static_cast<std::size_t>(n++)] = 0.0;
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(d(i)) < 1e-15) continue;
+    for (double b : {-h(i), h(i)}) {
+      const double s = (b - p0(i)) / d(i);
+      if (s > 0.0 && s < 1.0) cut[static_cast<std::size_t>(n++)] = s;
+    }
+  }
+  cut[static_cast<std::size_t>(n++)] = 1.0;
+  for (int i = 1; i < n; ++i)  // insertion sort of <= 8 (std::sort: GCC 12's -Warray-bounds)
+    for (int j = i;
+         j > 0 && cut[static_cast<std::size_t>(j - 1)] > cut[static_cast<std::size_t>(j)]; --j)
+      std::swap(cut[static_cast<std::size_t>(j - 1)], cut[static_cast<std::size_t>(j)]);
+  auto value = [&](double s) {
+    const Eigen::Vector3d x = p0 + s * d;
+    return (x - x.cwiseMax(-h).cwiseMin(h)).squaredNorm();
+  };
+  double best = value(0.0), best_s = 0.0;
+  for (int k = 0; k + 1 < n; ++k) {
+    const double a = cut[static_cast<std::size_t>(k)], b = cut[static_cast<std::size_t>(k + 1)];
+    const Eigen::Vector3d mid = p0 + 0.5 * (a + b) * d;
+    double qa = 0.0, qb = 0.0;  // the piece: qa s^2 + qb s + const
+    bool inside = true;
+    for (int i = 0; i < 3; ++i) {
+      if (std::abs(mid(i)) <= h(i)) continue;
+      const double face = mid(i) > 0.0 ? h(i) : -h(i);
+      inside = false;
+      qa += d(i) * d(i);
+      qb += 2.0 * d(i) * (p0(i) - face);
+    }
+    if (inside) {  // the piece lies inside the box
+      *s_min = 0.5 * (a + b);
+      return 0.0;
+    }
+    const double s = qa > 0.0 ? std::clamp(-qb / (2.0 * qa), a, b) : a;
+    const double v = value(s);
+    if (v < best) best = v, best_s = s;
+  }
+  *s_min = best_s;
+  return best;
+}
+
+/// Penetration depth of a segment that meets the box (box frame) and the direction n that
+/// separates them by it (the segment moves along +n): the least overlap over the separating
+/// axes of the pair, the box's face normals and their cross products with the segment, which
+/// are the face normals of their Minkowski difference (exact for convex polytopes).
+double segmentBoxPenetration(const Eigen::Vector3d& p0, const Eigen::Vector3d& d,
+                             const Eigen::Vector3d& h, Eigen::Vector3d* n_out) {
+  double depth = std::numeric_limits<double>::infinity();
+  auto tryAxis = [&](Eigen::Vector3d n) {
+    const double len = n.norm();
+    if (len < 1e-9) return;
+    n /= len;
+    const double r = h.cwiseProduct(n).cwiseAbs().sum();
+    const double a0 = n.dot(p0), a1 = n.dot(p0 + d);
+    const double up = r - std::min(a0, a1);    // move the segment along +n
+    const double down = std::max(a0, a1) + r;  // ... along -n
+    if (up < depth) depth = up, *n_out = n;
+    if (down < depth) depth = down, *n_out = -n;
+  };
+  for (int i = 0; i < 3; ++i) tryAxis(Eigen::Vector3d::Unit(i));
+  for (int i = 0; i < 3; ++i) tryAxis(Eigen::Vector3d::Unit(i).cross(d));
+  return depth;
+}
+
 }  // namespace
 
 ObstacleGeometry ObstacleGeometry::fromSpec(const core::ObstacleSpec& spec, double toes_x) {
@@ -106,13 +181,43 @@ double capsuleDistance(const Capsule& a, const Capsule& b, Eigen::Vector3d* pa,
   return d - a.radius - b.radius;
 }
 
-double obstacleDistance(const Capsule& a, const ObstacleGeometry& o, Eigen::Vector3d* pa,
-                        Eigen::Vector3d* pb) {
+double boxDistance(const Capsule& a, const ObstacleGeometry& o, Eigen::Vector3d* pa,
+                   Eigen::Vector3d* pb) {
+  const Eigen::Vector3d h = 0.5 * o.size, p0 = a.p0 - o.centre, d = a.p1 - a.p0;
+  double s = 0.0;
+  const double d2 = segmentBoxSquaredDistance(p0, d, h, &s);
+  const Eigen::Vector3d q = p0 + s * d;  // the segment's nearest point, box frame
+  if (d2 > 0.0) {
+    const Eigen::Vector3d b = q.cwiseMax(-h).cwiseMin(h);
+    const double dist = std::sqrt(d2);
+    const Eigen::Vector3d n = (q - b) / dist;
+    if (pa) *pa = o.centre + q - a.radius * n;
+    if (pb) *pb = o.centre + b;
+    return dist - a.radius;
+  }
+  Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
+  const double depth = segmentBoxPenetration(p0, d, h, &n);
+  // Where the segment, moved out by depth along n, touches the box: the box's witness point;
+  // the capsule's is that point moved back, less the radius.
+  const Eigen::Vector3d out = p0 + depth * n;
+  segmentBoxSquaredDistance(out, d, h, &s);
+  const Eigen::Vector3d touch = (out + s * d).cwiseMax(-h).cwiseMin(h);
+  if (pa) *pa = o.centre + touch - (depth + a.radius) * n;
+  if (pb) *pb = o.centre + touch;
+  return -depth - a.radius;
+}
+
+double obstacleDistanceFcl(const Capsule& a, const ObstacleGeometry& o, Eigen::Vector3d* pa,
+                           Eigen::Vector3d* pb) {
+  if (o.shape != core::ObstacleSpec::Shape::Box) return obstacleDistance(a, o, pa, pb);
   fcl::Transform3d X = fcl::Transform3d::Identity();
   X.translation() = o.centre;
-  if (o.shape == core::ObstacleSpec::Shape::Box) {
-    return signedDistance(a, fcl::Boxd(o.size), X, pa, pb);
-  }
+  return signedDistance(a, fcl::Boxd(o.size), X, pa, pb);
+}
+
+double obstacleDistance(const Capsule& a, const ObstacleGeometry& o, Eigen::Vector3d* pa,
+                        Eigen::Vector3d* pb) {
+  if (o.shape == core::ObstacleSpec::Shape::Box) return boxDistance(a, o, pa, pb);
   // A round bar along world y. Within |y| < length / 2 its surface is that of a capsule of the
   // same radius, whose distance is exact (GJK on FCL's cylinder is off by ~1e-4 m).
   const Eigen::Vector3d half(0.0, 0.5 * o.length, 0.0);

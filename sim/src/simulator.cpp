@@ -490,7 +490,7 @@ CollisionStatus Simulator::collisions() const {
       if (low < c.ground_clearance) c.ground_clearance = low, c.ground_link = cd.link;
     }
     if (s.has_obstacle) {
-      const double dist = robots::obstacleDistance(cap, s.obstacle);
+      const double dist = robots::obstacleDistanceFcl(cap, s.obstacle);
       if (dist < c.obstacle_distance) c.obstacle_distance = dist, c.obstacle_link = cd.link;
     }
   }

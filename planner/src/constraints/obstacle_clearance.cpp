@@ -1,6 +1,6 @@
 // Every leg capsule at least obstacle_clearance from the obstacle (at the homotopy's current
 // height), less its swept margin: one row, the smooth minimum (KS, smooth_min_rho) of the
-// distances (FCL). Scale: kDistScale (m). One row per sample.
+// distances (closed form, robots::obstacleDistance). Scale: kDistScale (m). One row per sample.
 #include "row_term.hpp"
 
 namespace overstep::planner::detail {

@@ -1,9 +1,9 @@
 #pragma once
 /// \file
 /// Collision geometry (planner, check and simulator): link capsules (rounded cylinders, seed
-/// III-C-2) and the obstacle, with signed distances from FCL (negative = penetration depth), and a
-/// smooth minimum (Kreisselmeier-Steinhauser) to aggregate many distances into one differentiable
-/// row.
+/// III-C-2) and the obstacle, with signed distances (negative = penetration depth) in closed form
+/// and, for the box, also from FCL; and a smooth minimum (Kreisselmeier-Steinhauser) to
+/// aggregate many distances into one differentiable row.
 
 #include <Eigen/Geometry>
 
@@ -34,9 +34,21 @@ struct ObstacleGeometry {
 /// Signed distance between two capsules; nearest points (world) if requested.
 double capsuleDistance(const Capsule& a, const Capsule& b, Eigen::Vector3d* pa = nullptr,
                        Eigen::Vector3d* pb = nullptr);
-/// Signed distance between a capsule and the obstacle.
+/// Signed distance between a capsule and the obstacle, closed form (the planner's rows):
+/// boxDistance for a box bar, capsuleDistance for a round one. Nearest points (world) if
+/// requested; when they overlap, the points the least translation separating them joins.
 double obstacleDistance(const Capsule& a, const ObstacleGeometry& obstacle,
                         Eigen::Vector3d* pa = nullptr, Eigen::Vector3d* pb = nullptr);
+/// Signed distance between a capsule and a box obstacle (axis-aligned, world frame): the exact
+/// minimum over the segment of its distance to the box less the radius; when the segment meets
+/// the box, minus the least translation that separates them (by the separating axes) less the
+/// radius.
+double boxDistance(const Capsule& a, const ObstacleGeometry& box, Eigen::Vector3d* pa = nullptr,
+                   Eigen::Vector3d* pb = nullptr);
+/// The same signed distance from FCL (GJK and EPA of libccd, within ~1e-6 m): a second,
+/// independent implementation, for `overstep check` and the simulator's collision report.
+double obstacleDistanceFcl(const Capsule& a, const ObstacleGeometry& obstacle,
+                           Eigen::Vector3d* pa = nullptr, Eigen::Vector3d* pb = nullptr);
 /// Smooth minimum -1/rho log(sum exp(-rho d_i)) (<= min d_i, within log(n)/rho of it); writes
 /// d(smoothMin)/d(d_i) (softmax weights, summing to 1) if requested.
 double smoothMin(const Eigen::VectorXd& d, double rho, Eigen::VectorXd* weights = nullptr);
