@@ -69,7 +69,7 @@ TEST_F(DemoLcm, SmallObstacleRunWritesAConsistentVerdict) {
   // Execution fidelity (issue 19), from the recorded sensor readings: with the whole-body ZMP
   // reference and the landing control the stance CoPs stay on the plan's, touchdown loads within
   // 1.3 x the weight, no chatter, the pelvis within the issue's 10 mrad of the plan, the robot
-  // still at the end (measured on this plan, session 31, seeds 1-3: losses 1-2 / 0-1, loads
+  // still at the end (measured on the current plan, seeds 1-3: losses 1-2 / 0-1, loads
   // <= 0.95, CoP p95 <= 9.0 mm, max 32-33 / 18-45 mm, pelvis 5.9 mrad, static at once; with the
   // table-cart reference and no landing control, on an earlier plan: losses 6 / 5, CoP p95 12.5
   // mm, max 65 mm, 0.9 s to settle; docs/runtime.md).
