@@ -117,6 +117,7 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
       st.contact[kRight] = ph.right_contact;
       st.contact[kLeft] = ph.left_contact;
       for (int f = 0; f < 2; ++f) st.sole[f] = model.framePose(m.sole_frame[f]);
+      m.soleJacobians(m.ws.front());
       m.distributeWrench(m.ws.front());
       for (int f = 0; f < 2; ++f) {
         const Eigen::MatrixXd J = model.frameJacobian(m.sole_frame[f]);

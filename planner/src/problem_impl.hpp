@@ -242,6 +242,7 @@ struct OverstepProblem::Impl : ProblemModel {
         st.ik_seed_gap += gap * gap;
       }
     }
+    st.J_sole[anchor] = m.frameJacobian(sole_frame[anchor]);  // the other's: solveOtherLeg
     st.tau = m.inverseDynamics();
     st.W_O = m.contactWrenchFromBase(st.tau);
     for (int f = 0; f < 2; ++f) st.sole[f] = m.framePose(sole_frame[f]);
@@ -252,13 +253,21 @@ struct OverstepProblem::Impl : ProblemModel {
   }
 
   /// Actuator torques of the robot in contact (seed eq. 1): the actuated rows of inverse dynamics
-  /// minus the feet's J^T w (the torque rows, seed eq. 27 and the plan file use these).
+  /// minus the feet's J^T w (the torque rows, seed eq. 27 and the plan file use these; the same
+  /// sum as WholeBodyModel::torquesInContact, which `overstep check` uses, without recomputing
+  /// the Jacobians; a foot out of contact carries no wrench).
   void contactTorques(Workspace& w) const {
     State& st = w.st;
-    st.tau_act = w.model
-                     ->torquesInContact(st.tau, {{sole_frame[kRight], st.wrench[kRight]},
-                                                 {sole_frame[kLeft], st.wrench[kLeft]}})
-                     .segment(6, model_template.actuatedCount());
+    Eigen::VectorXd tau = st.tau;
+    for (int f = 0; f < 2; ++f)
+      if (st.contact[f]) tau.noalias() -= st.J_sole[f].transpose() * st.wrench[f];
+    st.tau_act = tau.segment(6, model_template.actuatedCount());
+  }
+
+  /// st.J_sole of the feet in contact at the model's current positions.
+  void soleJacobians(Workspace& w) const {
+    for (int f = 0; f < 2; ++f)
+      if (w.st.contact[f]) w.st.J_sole[f] = w.model->frameJacobian(sole_frame[f]);
   }
 
   /// Closed-form inverse kinematics of leg `leg` (robots::LegIk) putting its sole frame at X_WS,
@@ -289,7 +298,8 @@ struct OverstepProblem::Impl : ProblemModel {
     for (int j = 0; j < 6; ++j) st.q(cols[j]) = ik.q(j);
     m.setPositions(st.q);
     st.ik_error = poseError(target, m.framePose(f)).norm();
-    const Eigen::MatrixXd Jf = m.frameJacobian(f);
+    st.J_sole[leg] = m.frameJacobian(f);
+    const Eigen::MatrixXd& Jf = st.J_sole[leg];
     for (int j = 0; j < 6; ++j) J.col(j) = Jf.col(cols[j]);
     // The leg is singular only when stretched beyond reach (a point the reach row rejects, met
     // during line searches): damped least squares there keeps the state finite.
@@ -327,6 +337,7 @@ struct OverstepProblem::Impl : ProblemModel {
     st.contact[kRight] = ph.right_contact;
     st.contact[kLeft] = ph.left_contact;
     m.setState(q, v, a);
+    soleJacobians(w);
     st.tau = m.inverseDynamics();
     st.W_O = m.contactWrenchFromBase(st.tau);
     for (int f = 0; f < 2; ++f) st.sole[f] = m.framePose(sole_frame[f]);
@@ -343,7 +354,7 @@ struct OverstepProblem::Impl : ProblemModel {
     const auto& ph = phaseTable()[static_cast<std::size_t>(phase)];
     if (ph.right_contact && ph.left_contact) return Eigen::VectorXd::Constant(1, st.ds_balance);
     const int stance = ph.right_contact ? kRight : kLeft;
-    const Eigen::MatrixXd J = w.model->frameJacobian(sole_frame[stance]);
+    const Eigen::MatrixXd& J = st.J_sole[stance];
     Eigen::VectorXd r(4);
     for (int f = 0; f < 2; ++f)
       for (int e = 0; e < 2; ++e) {
@@ -605,7 +616,6 @@ struct OverstepProblem::Impl : ProblemModel {
   /// the two elastic-ankle balances).
   void distributeWrench(Workspace& w) const {
     State& st = w.st;
-    robots::WholeBodyModel& m = *w.model;
     st.wrench[kRight].setZero();
     st.wrench[kLeft].setZero();
     if (st.contact[kRight] != st.contact[kLeft]) {
@@ -623,7 +633,7 @@ struct OverstepProblem::Impl : ProblemModel {
       px << 0, -p.z(), p.y(), p.z(), 0, -p.x(), -p.y(), p.x(), 0;
       A.block<3, 3>(0, 6 * f + 3) = px;
       A.block<3, 3>(3, 6 * f + 3).setIdentity();
-      const Eigen::MatrixXd J = m.frameJacobian(sole_frame[f]);
+      const Eigen::MatrixXd& J = st.J_sole[f];
       for (int e = 0; e < 2; ++e) {
         const int c = flex_coord[static_cast<std::size_t>(2 * f + e)];
         A.block<1, 6>(6 + 2 * f + e, 6 * f) = J.col(c).transpose();
@@ -694,6 +704,7 @@ struct OverstepProblem::Impl : ProblemModel {
     sd.model = &m;
     sd.st = &st;
     worldCapsules(w, g.phase, sd);
+    sd.com_acc = m.comAcceleration();
     int ri = 0, re = 0;
     for (const auto& term : sample_terms) {
       const int n = term->rows(*this, g);

@@ -88,6 +88,10 @@ struct State {
   core::Vector6d wrench[2];      // [torque; force] about each sole origin, world frame
   bool contact[2] = {false, false};
   Eigen::Isometry3d sole[2];
+  /// 6 x dofs Jacobians of the soles in contact at q ([angular; linear], world axes, about the
+  /// sole origin); computed once per state, read by the wrench split, the contact torques and the
+  /// elastic rows.
+  Eigen::MatrixXd J_sole[2];
   core::Vector6d W_O;  // total contact wrench about the world origin
   double ik_error = 0.0;
   double reach = 0.0;        // hip-ankle distance of the IK leg

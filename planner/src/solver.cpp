@@ -461,26 +461,10 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     }
     if (i > 0 && warm_start == nullptr) {
       // A harder stage starts infeasible (e.g. violations ~2 when the CoP box halves); SLSQP's
-      // identity-Hessian steps from there wander (measured). Project back first. The target
-      // stage's projection runs until its first feasible point (at most as long as a polish):
-      // when the caller's check takes that point, it is the plan; otherwise SLSQP starts from a
-      // feasible point. (After a fixed 40-step projection the default's target SLSQP never
-      // became feasible in 88 iterations and a 180-step polish did the stage's work from its
-      // best point; docs/history/planner.md.)
-      const bool target = i + 1 == stages.size();
-      bool taken = false;
-      const AcceptFn first_feasible = [&](const Eigen::VectorXd& xf) {
-        taken = accept && accept(xf);
-        return true;  // stop here either way
-      };
-      const RestorationResult proj =
-          restore(x, target ? kPolishIterations : 40, target ? first_feasible : AcceptFn{});
+      // identity-Hessian steps from there wander (measured). Project back first.
+      const RestorationResult proj = restore(x, 40);
       out.iterations += proj.iterations;
       x = proj.x;
-      if (taken) {
-        endAt(x, "projected");
-        break;
-      }
     }
     const double remaining = time_limit_s - elapsed();
     if (remaining <= 0.0) {

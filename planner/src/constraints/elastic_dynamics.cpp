@@ -16,7 +16,7 @@ class ElasticDynamics final : public SampleTerm {
   void evaluate(const ProblemModel& p, const SampleData& d, double* out) const override {
     const State& st = *d.st;
     const int stance = st.contact[kRight] ? kRight : kLeft;
-    const Eigen::MatrixXd J = d.model->frameJacobian(p.sole_frame[stance]);
+    const Eigen::MatrixXd& J = st.J_sole[stance];
     int e = 0;
     for (int f = 0; f < 2; ++f) {
       for (int k = 0; k < 2; ++k) {

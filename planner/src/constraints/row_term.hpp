@@ -24,6 +24,7 @@ struct SampleData {
   std::vector<robots::Capsule> capsules;  ///< world frame, ProblemModel::caps order
   /// How far each capsule can travel before the nearer sample (m; swept clearance, 0 when off).
   std::vector<double> sweep;
+  Eigen::Vector3d com_acc = Eigen::Vector3d::Zero();  ///< CoM acceleration, world axes (m/s^2)
 };
 
 /// A family of rows at the samples.

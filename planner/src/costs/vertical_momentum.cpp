@@ -18,7 +18,7 @@ class VerticalMomentumRate final : public SampleCost {
  public:
   const char* name() const override { return "lin_mom_z_rate"; }
   double value(const ProblemModel&, const SampleData& d) const override {
-    const Eigen::Vector3d cdd = d.model->comAcceleration();
+    const Eigen::Vector3d& cdd = d.com_acc;
     return cdd.z() * cdd.z();
   }
 };

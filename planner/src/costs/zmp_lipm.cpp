@@ -9,7 +9,7 @@ class ZmpLipm final : public SampleCost {
  public:
   const char* name() const override { return "zmp_lipm"; }
   double value(const ProblemModel& p, const SampleData& d) const override {
-    const Eigen::Vector3d cdd = d.model->comAcceleration();
+    const Eigen::Vector3d& cdd = d.com_acc;
     const Eigen::Vector3d com = d.model->com();
     const Eigen::Vector2d zwb = core::zmpFromWrench(d.st->W_O);
     const Eigen::Vector2d ztc =
