@@ -22,16 +22,19 @@
 namespace overstep {
 namespace {
 
-/// Check-driven refinement. The rows hold at the samples, the CoP box, friction and pelvis range
-/// at a margin (limit_margin, pelvis_margin) so that the motion between samples keeps inside;
-/// `overstep check` verifies on a 1 kHz grid. When the planner's solution passes its rows but
-/// the check finds the CoP, friction or pelvis over a bound between samples, the last stage is
-/// solved again from that solution with the margin of the failed family tightened by a fifth,
-/// at most twice. Measured: the identification loop's re-plan for a 1.5 kg payload (5 cm bar,
-/// 2 cm box) passed its rows with a CoP 1.3 mm over the box at the right touchdown.
-/// Returns the work of the re-solves' problems (evaluations and Jacobians); `checked` holds the
-/// dense plan of the final solution and its check when the last check was of that solution (the
-/// caller then need not sample and check it again).
+/// Check-driven mesh refinement. The rows hold at the samples, the CoP box, friction and pelvis
+/// range at a margin (limit_margin, pelvis_margin) so that the motion between samples keeps
+/// inside; `overstep check` verifies on a 1 kHz grid. When the planner's solution passes its
+/// rows but the check finds a family over its bound between samples, a grid point carrying the
+/// path constraints (no objective weight; OverstepProblem's check_points) is added at the worst
+/// instant of each crossing and the last stage is solved again from that solution; where no new
+/// point can be added (the crossing is at a grid point already), the CoP / friction or pelvis
+/// margin is tightened by a fifth instead. At most twice; a foot off its placement (`stance`) ends
+/// it. Measured: the identification loop's re-plan for a 1.5 kg payload (5 cm bar, 2 cm box) passed
+/// its rows with a CoP 1.3 mm over the box at the right touchdown. Returns the work of the
+/// re-solves' problems (evaluations and Jacobians); `checked` holds the dense plan of the final
+/// solution and its check when the last check was of that solution (the caller then need not sample
+/// and check it again).
 struct CheckedPlan {
   core::Plan plan;
   planner::CheckReport report;
@@ -60,6 +63,7 @@ planner::WorkAccount refineByCheck(planner::OverstepProblem& problem, planner::N
                                    planner::PlanOutcome& out, std::optional<CheckedPlan>& checked) {
   planner::WorkAccount extra;
   planner::PlannerConfig tight = cfg;
+  std::vector<planner::GridPoint> points;
   std::unique_ptr<planner::OverstepProblem> refined;
   auto account = [&] {
     if (!refined) return;
@@ -70,29 +74,41 @@ planner::WorkAccount refineByCheck(planner::OverstepProblem& problem, planner::N
     // Sampled by the caller's problem (the margins do not enter the dense plan; its recorded
     // configuration stays the caller's).
     checked = CheckedPlan{problem.toPlan(out.final.x, rate), {}};
-    checked->report = planner::checkPlan(checked->plan, model);
+    checked->report = planner::checkPlan(checked->plan, model, 1000.0, true);
     const planner::CheckReport& report = checked->report;
     if (report.valid) break;
     bool contact = false, pelvis = false, other = false;
+    std::vector<std::string> over;
     for (const auto& f : report.families) {
       if (f.ok()) continue;
+      over.push_back(f.name);
       if (f.name == "cop" || f.name == "friction")
         contact = true;
       else if (f.name == "pelvis")
         pelvis = true;
-      else
-        other = true;
+      else if (f.name == "stance")
+        other = true;  // the feet's placement: no row at a point holds it
     }
-    if (other) break;  // a margin does not help (e.g. clearance between samples)
-    if (contact) tight.limit_margin *= 0.8;
-    if (pelvis) tight.pelvis_margin *= 0.8;
-    std::fprintf(log,
-                 "-- the 1 kHz check found the %s over its bound between samples: the last stage "
-                 "again with limit_margin %.3f, pelvis_margin %.3f\n",
-                 contact ? "CoP or friction" : "pelvis", tight.limit_margin, tight.pelvis_margin);
-    std::fflush(log);
+    if (other) break;
+    const planner::PhaseTiming timing(out.final.x.head(planner::kPhaseCount));
+    const std::size_t before = points.size();
+    for (double t : planner::violationPeaks(report, over)) points.push_back(timing.locate(t));
     account();
-    refined = std::make_unique<planner::OverstepProblem>(model, tight, ob);
+    refined = std::make_unique<planner::OverstepProblem>(model, tight, ob, points);
+    points = refined->checkPoints();
+    if (points.size() == before) {  // every crossing at a point already: tighten a margin
+      if (!contact && !pelvis) break;
+      if (contact) tight.limit_margin *= 0.8;
+      if (pelvis) tight.pelvis_margin *= 0.8;
+      refined = std::make_unique<planner::OverstepProblem>(model, tight, ob, points);
+    }
+    std::string names;
+    for (const auto& n : over) names += (names.empty() ? "" : ", ") + n;
+    std::fprintf(log,
+                 "-- the 1 kHz check found %s over between samples: the last stage again with "
+                 "%zu check points, limit_margin %.3f, pelvis_margin %.3f\n",
+                 names.c_str(), points.size(), tight.limit_margin, tight.pelvis_margin);
+    std::fflush(log);
     const Eigen::VectorXd from = out.final.x;
     planner::PlanOutcome again = planner::planOverstep(
         *refined, solver, std::max(1.0, cfg.solver.time_limit - out.solve_time),

@@ -243,4 +243,27 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
   return report;
 }
 
+std::vector<double> violationPeaks(const CheckReport& report,
+                                   const std::vector<std::string>& families) {
+  std::vector<double> peaks;
+  for (std::size_t f = 0; f < report.families.size(); ++f) {
+    const CheckFamily& fam = report.families[f];
+    if (std::find(families.begin(), families.end(), fam.name) == families.end()) continue;
+    double worst = 0.0, t_worst = 0.0;
+    bool in_run = false;
+    for (std::size_t i = 0; i <= report.trace.size(); ++i) {
+      const bool over = i < report.trace.size() && f < report.trace[i].size() &&
+                        report.trace[i][f] > fam.tolerance;
+      if (over && (!in_run || report.trace[i][f] > worst)) {
+        worst = report.trace[i][f];
+        t_worst = report.trace_t[i];
+      }
+      if (in_run && !over) peaks.push_back(t_worst);
+      in_run = over;
+    }
+  }
+  std::sort(peaks.begin(), peaks.end());
+  return peaks;
+}
+
 }  // namespace overstep::planner

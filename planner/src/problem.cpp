@@ -14,11 +14,12 @@ const char* familyName(Family f) {
 
 // ==================================================================== public interface
 OverstepProblem::OverstepProblem(const robots::WholeBodyModel& model, PlannerConfig config,
-                                 core::ObstacleSpec obstacle)
+                                 core::ObstacleSpec obstacle, std::vector<GridPoint> check_points)
     : impl_(std::make_unique<Impl>(model, std::move(config), obstacle)) {
   core::validate(obstacle);
-  impl_->setUp();
+  impl_->setUp(std::move(check_points));
 }
+const std::vector<GridPoint>& OverstepProblem::checkPoints() const { return impl_->check_points; }
 OverstepProblem::~OverstepProblem() = default;
 
 const VariableLayout& OverstepProblem::layout() const { return impl_->lay; }

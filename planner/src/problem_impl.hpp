@@ -36,7 +36,7 @@ struct OverstepProblem::Impl : ProblemModel {
       : ProblemModel(m, std::move(c), o) {}
 
   // -------------------------------------------------------------- set-up
-  void setUp() {
+  void setUp(std::vector<GridPoint> extra) {
     const auto& d = model_template.description();
     if (model_template.baseDofs() != 6 || d.feet.size() != 2) {
       throw InputError("planner: needs a floating-base robot with two feet");
@@ -120,6 +120,8 @@ struct OverstepProblem::Impl : ProblemModel {
       for (int k = 0; k <= (closed ? nph : nph - 1); ++k)
         grid.push_back({i, static_cast<double>(k) / nph, 0.0});
     }
+    n_regular = static_cast<int>(grid.size());
+    addCheckPoints(std::move(extra));
     // The row layout, from the terms (constraints/terms.cpp gives the stacking order).
     sample_terms = sampleTerms();
     event_terms = eventTerms();
@@ -137,7 +139,7 @@ struct OverstepProblem::Impl : ProblemModel {
       eq_off.push_back(n_eq);
       for (const auto& term : sample_terms) {
         auto& fam = term->equality() ? eq_fam : ineq_fam;
-        fam.insert(fam.end(), static_cast<std::size_t>(term->rows(*this, g)), term->family());
+        fam.insert(fam.end(), static_cast<std::size_t>(termRows(*term, g)), term->family());
       }
       ineq_cnt.push_back(static_cast<int>(ineq_fam.size()) - n_ineq);
       eq_cnt.push_back(static_cast<int>(eq_fam.size()) - n_eq);
@@ -707,7 +709,7 @@ struct OverstepProblem::Impl : ProblemModel {
     sd.com_acc = m.comAcceleration();
     int ri = 0, re = 0;
     for (const auto& term : sample_terms) {
-      const int n = term->rows(*this, g);
+      const int n = termRows(*term, g);
       if (n == 0) continue;
       if (term->equality()) {
         term->evaluate(*this, sd, out.eq.data() + re);
@@ -745,6 +747,38 @@ struct OverstepProblem::Impl : ProblemModel {
     }
   }
 
+  /// Rows of a sample term at grid point g. A mesh-refinement point carries the path
+  /// constraints, not the collocation of the elastic dynamics: the samples are its grid, and the
+  /// plan integrates the bushings between them (passive_polish), which the check verifies.
+  int termRows(const SampleTerm& term, const GridPoint& g) const {
+    return g.refinement && term.family() == Family::Dynamics ? 0 : term.rows(*this, g);
+  }
+
+  /// Mesh refinement: each point joins the grid after the regular points (rows only, no
+  /// objective weight; termRows). A double support that ends in a lift-off keeps its points before
+  /// it (its contact rows degenerate there; the lift-off event rows hold at the switch).
+  void addCheckPoints(std::vector<GridPoint> extra) {
+    std::sort(extra.begin(), extra.end(), [](const GridPoint& a, const GridPoint& b) {
+      return a.phase != b.phase ? a.phase < b.phase : a.s < b.s;
+    });
+    for (GridPoint g : extra) {
+      if (g.phase < 0 || g.phase >= kPhaseCount || !(g.s >= 0.0 && g.s <= 1.0))
+        throw InputError("planner: check point outside the phases (phase " +
+                         std::to_string(g.phase) + ", s " + std::to_string(g.s) + ")");
+      const auto& ph = phaseTable()[static_cast<std::size_t>(g.phase)];
+      if (ph.right_contact && ph.left_contact && g.phase + 1 < kPhaseCount)
+        g.s = std::min(g.s, 1.0 - 1e-3);
+      g.t = 0.0;
+      g.refinement = true;
+      const bool near = std::any_of(grid.begin(), grid.end(), [&](const GridPoint& o) {
+        return o.phase == g.phase && std::abs(o.s - g.s) < 1e-3;
+      });
+      if (near) continue;
+      grid.push_back(g);
+      check_points.push_back(g);
+    }
+  }
+
   // -------------------------------------------------------------- assembly
   /// Trapezoid quadrature weight of grid point k within its phase.
   double sampleWeight(const Workspace& w, int k) const {
@@ -761,7 +795,8 @@ struct OverstepProblem::Impl : ProblemModel {
                    std::array<double, kObjectiveTerms>* terms) const {
     std::array<double, kObjectiveTerms> acc{};
     const auto& names = objectiveTermNames();
-    for (std::size_t k = 0; k < s.size(); ++k) {
+    // Check points (after the regular ones) carry rows only.
+    for (std::size_t k = 0; k < static_cast<std::size_t>(n_regular); ++k) {
       const double wk = sampleWeight(w, static_cast<int>(k));
       for (int i = 0; i < kObjectiveTerms; ++i)
         acc[static_cast<std::size_t>(i)] += wk * s[k]->terms[static_cast<std::size_t>(i)];

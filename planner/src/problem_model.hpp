@@ -139,6 +139,8 @@ struct ProblemModel {
   Eigen::VectorXd q_rest;  // half-sitting (upper body posture held)
 
   std::vector<GridPoint> grid;  // (phase, s); t filled per evaluation
+  int n_regular = 0;            // grid[0, n_regular): the samples; then the check points
+  std::vector<GridPoint> check_points;
   std::vector<int> ineq_off, ineq_cnt, eq_off, eq_cnt;
   std::vector<Family> ineq_fam, eq_fam;
   int n_ineq = 0, n_eq = 0;

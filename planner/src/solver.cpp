@@ -246,6 +246,7 @@ class NloptSolver final : public NlpSolver {
 
 /// Restoration steps after a stage that SLSQP left infeasible.
 constexpr int kPolishIterations = 400;
+constexpr int kPolishRefusals = 3;  // the check's refusals that end the target stage's polish
 
 }  // namespace
 
@@ -253,7 +254,7 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
                                      int max_iterations, const std::atomic<bool>* stop,
                                      const std::function<void(const IterationInfo&)>& on_iter,
                                      double time_limit_s, const AcceptFn& accept,
-                                     double accept_below) {
+                                     double accept_below, int refusals_to_stop) {
   // Projected Levenberg-Marquardt on the violation residuals r = [max(0, g); h] (rows near
   // activity keep their Jacobians so the step does not break them). NLopt offers no
   // least-squares method; SLSQP started far from feasibility stalls (measured: docs/planner.md).
@@ -290,6 +291,7 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
         break;
       }
       problem.evaluate(x, e);  // the problem's state at x again (the same values)
+      if (++out.refusals == refusals_to_stop) break;
       next_ask = it + gap;
       gap *= 2;
     }
@@ -388,10 +390,12 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
            (w1.evaluate_s - w0.evaluate_s) - (w1.derivatives_s - w0.derivatives_s);
     return result;
   };
-  auto restore = [&](const Eigen::VectorXd& from, int iterations, const AcceptFn& take = {}) {
+  auto restore = [&](const Eigen::VectorXd& from, int iterations, const AcceptFn& take = {},
+                     int refusals_to_stop = 0) {
     return accounted(out.split.restoration, [&] {
       return restoreFeasibility(problem, from, iterations, stop, on_restore,
-                                time_limit_s - elapsed(), take);
+                                time_limit_s - elapsed(), take, kFeasibilityTolerance,
+                                refusals_to_stop);
     });
   };
   // The result is x itself (no stage solve ended the plan).
@@ -485,9 +489,13 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
       // 20 cm run 30 steps ended at 0.013 and 150 at 0.0137, still descending; measured,
       // docs/planner.md). The target stage's polish may stop at the first feasible point the
       // caller's finer measure takes (on the default: the last 396 of its 400 steps went from
-      // 0.0096 to 0.0073 without `accept`).
+      // 0.0096 to 0.0073 without `accept`), and stops once it has refused kPolishRefusals
+      // feasible points: more steps inside the rows rarely move what the check finds between
+      // samples (the 20.5 cm bar: six refusals over its last 183 steps, 24 s), a grid point
+      // there does (the caller's mesh refinement).
       const bool target = i + 1 == stages.size();
-      const RestorationResult polish = restore(x, kPolishIterations, target ? accept : AcceptFn{});
+      const RestorationResult polish =
+          restore(x, kPolishIterations, target ? accept : AcceptFn{}, target ? kPolishRefusals : 0);
       out.iterations += polish.iterations;
       x = polish.x;
       problem.evaluate(x, out.final.evaluation);

@@ -232,4 +232,13 @@ double smoothMin(const Eigen::VectorXd& d, double rho, Eigen::VectorXd* weights)
   return m - std::log(s) / rho;
 }
 
+double softMin(const Eigen::VectorXd& d, double rho, Eigen::VectorXd* gradient) {
+  const double m = d.minCoeff();
+  const Eigen::ArrayXd e = (-rho * (d.array() - m)).exp();
+  const Eigen::ArrayXd w = e / e.sum();
+  const double b = (w * d.array()).sum();
+  if (gradient) *gradient = (w * (1.0 - rho * (d.array() - b))).matrix();
+  return b;
+}
+
 }  // namespace overstep::robots

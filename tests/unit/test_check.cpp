@@ -61,6 +61,29 @@ TEST_F(Check, JointPushedPastItsLimitIsNamed) {
   EXPECT_EQ(r.family("joint_limits")->detail, "RARM_JOINT3");
 }
 
+// The planner's mesh refinement reads where a family crosses its tolerance: one instant per
+// maximal run, its worst, from a traced report; nothing from an untraced one or for a family that
+// holds.
+TEST_F(Check, ViolationPeaksAreTheWorstInstantOfEachCrossing) {
+  core::Plan p = *plan_;
+  const auto& d = model_->description();
+  const int a = d.actuatedIndex("RARM_JOINT3");
+  const int row = model_->actuatedCoordinate(a);
+  const double upper = d.actuated[static_cast<std::size_t>(a)].safeUpper();
+  const int n = p.samples();
+  const int peak[2] = {n / 4, (3 * n) / 4};
+  for (int k = 0; k < n; ++k)
+    for (int c : peak)
+      if (std::abs(k - c) < 4) p.q(row, k) = upper + 0.05 - 0.01 * std::abs(k - c);
+  const CheckReport traced = checkPlan(p, *model_, 1000.0, true);
+  ASSERT_FALSE(traced.family("joint_limits")->ok());
+  const std::vector<double> t = violationPeaks(traced, {"joint_limits"});
+  ASSERT_EQ(t.size(), 2u);
+  for (int i = 0; i < 2; ++i) EXPECT_NEAR(t[static_cast<std::size_t>(i)], p.t(peak[i]), 1.5e-3);
+  EXPECT_TRUE(violationPeaks(traced, {"cop", "pelvis"}).empty());                // those hold
+  EXPECT_TRUE(violationPeaks(checkPlan(p, *model_), {"joint_limits"}).empty());  // no trace
+}
+
 TEST_F(Check, FootInsideTheObstacleIsNamed) {
   core::Plan p = *plan_;
   p.toes_x = -0.3;  // the bar now lies under the feet

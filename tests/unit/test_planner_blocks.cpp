@@ -237,10 +237,12 @@ TEST(Collision, BoxDistanceMatchesFclAndItsWitnessPoints) {
   EXPECT_GT(clear, 500);
 }
 
+// The log-sum-exp minimum (KS) of the self-clearance row: below the minimum by at most
+// log(n) / rho, its softmax weights its gradient.
 TEST(Collision, SmoothMinBoundsAndGradient) {
   Eigen::VectorXd d(4);
   d << 0.3, 0.05, 0.2, 0.051;
-  Eigen::VectorXd w;
+  Eigen::VectorXd w = Eigen::VectorXd::Constant(4, std::nan(""));
   const double rho = 200.0;
   const double s = smoothMin(d, rho, &w);
   EXPECT_LE(s, d.minCoeff());
@@ -251,6 +253,35 @@ TEST(Collision, SmoothMinBoundsAndGradient) {
     dp(i) += 1e-7;
     EXPECT_NEAR((smoothMin(dp, rho) - s) / 1e-7, w(i), 1e-5);
   }
+}
+
+TEST(Collision, SoftMinIsExactOnTiesBoundedAboveTheMinimumWithItsGradient) {
+  const double rho = 1000.0;
+  // Six tied distances (a start stance's foot capsules facing the bar): exactly their value,
+  // where the log-sum-exp minimum would be log(6) / rho = 1.8 mm below it.
+  EXPECT_NEAR(softMin(Eigen::VectorXd::Constant(6, 0.0105), rho), 0.0105, 1e-15);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 0.01);
+  for (int trial = 0; trial < 200; ++trial) {
+    const int n = 2 + trial % 9;
+    Eigen::VectorXd d(n);
+    for (int i = 0; i < n; ++i) d(i) = 0.02 + u(rng) * (trial % 3 == 0 ? 0.3 : 1.0);
+    Eigen::VectorXd g = Eigen::VectorXd::Constant(n, std::nan(""));
+    const double s = softMin(d, rho, &g);
+    EXPECT_GE(s, d.minCoeff() - 1e-15);
+    EXPECT_LE(s, d.minCoeff() + (n - 1) / (std::exp(1.0) * rho) + 1e-15);
+    ASSERT_TRUE(g.allFinite());
+    for (int i = 0; i < n; ++i) {
+      Eigen::VectorXd dp = d, dm = d;
+      dp(i) += 1e-8;
+      dm(i) -= 1e-8;
+      EXPECT_NEAR((softMin(dp, rho) - softMin(dm, rho)) / 2e-8, g(i), 1e-6) << trial << " " << i;
+    }
+  }
+  // One distance nearest by far: that distance.
+  Eigen::VectorXd far(3);
+  far << 0.01, 0.05, 0.08;
+  EXPECT_NEAR(softMin(far, rho), 0.01, 1e-12);
 }
 
 TEST(Obstacle, RejectsBadSizes) {

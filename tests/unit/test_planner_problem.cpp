@@ -123,6 +123,18 @@ TEST_F(Problem, RestorationStopsWhereAcceptTakesAPoint) {
   EXPECT_EQ(taken.x, asked.front());
   EXPECT_EQ(taken.iterations, asked_at.front());
   EXPECT_LE(taken.max_violation, kLevel);
+  // With refusals_to_stop it ends at the iterate of that refusal, not accepted.
+  asked.clear();
+  asked_at.clear();
+  steps = 0;
+  const RestorationResult stopped =
+      restoreFeasibility(p, *x_, kSteps, nullptr, count, inf, refuse, kLevel, 2);
+  EXPECT_FALSE(stopped.accepted);
+  EXPECT_EQ(stopped.refusals, 2);
+  ASSERT_EQ(asked.size(), 2u);
+  EXPECT_EQ(stopped.x, asked.back());
+  EXPECT_EQ(stopped.iterations, asked_at.back());
+  EXPECT_LT(stopped.iterations, plain.iterations);
 }
 
 TEST_F(Problem, LayoutAndRowFamiliesAreConsistent) {
@@ -221,6 +233,56 @@ TEST_F(Problem, DerivativesMatchCentralDifferences) {
         << "inequalities, column " << j;
     EXPECT_LT((je.col(j) - de).cwiseAbs().maxCoeff(), 1e-3 * scale_e) << "equalities, column " << j;
   }
+}
+
+// Mesh refinement: check points carry the path constraints of their instant (not the elastic
+// dynamics) and no objective weight; a point on or next to a sample is dropped; the rows'
+// derivatives at them are right.
+TEST_F(Problem, CheckPointsAddRowsButLeaveTheObjective) {
+  core::ObstacleSpec ob;
+  ob.height = 0.05;
+  const std::vector<GridPoint> pts = {
+      {1, 0.37, 0.0},    // right swing
+      {1, 0.3704, 0.0},  // within 1e-3 of the first: dropped
+      {2, 0.0, 0.0},     // the transfer's first sample: dropped
+      {2, 0.97, 0.0}};   // late in the transfer, after its last sample
+  OverstepProblem refined(*model_, PlannerConfig{}, ob, pts);
+  ASSERT_EQ(refined.checkPoints().size(), 2u);
+  EXPECT_EQ(refined.checkPoints()[0].phase, 1);
+  EXPECT_EQ(refined.checkPoints()[1].phase, 2);
+  EXPECT_GT(refined.inequalityCount(), problem_->inequalityCount());
+  EXPECT_EQ(refined.equalityCount(), problem_->equalityCount());  // no elastic collocation
+  const auto& fam = refined.inequalityFamilies();
+  EXPECT_EQ(std::count(fam.begin() + problem_->inequalityCount(), fam.end(), Family::Dynamics), 0);
+  EXPECT_EQ(std::count(fam.begin() + problem_->inequalityCount(), fam.end(), Family::Clearance), 4);
+  Evaluation base, more;
+  problem_->evaluate(*x_, base);
+  refined.evaluate(*x_, more);
+  EXPECT_EQ(more.objective, base.objective);
+  EXPECT_EQ(more.ineq.head(base.ineq.size()), base.ineq);  // the samples' rows come first
+  // The added rows' derivatives against central differences (a duration moves every point; a
+  // control point near the swing's check point moves it).
+  Eigen::VectorXd g;
+  Eigen::MatrixXd ji, je;
+  OverstepProblem& r = refined;
+  r.derivatives(*x_, more, g, ji, je);
+  const auto& lay = r.layout();
+  const int extra = r.inequalityCount() - problem_->inequalityCount();
+  for (int j : {1, 2, lay.legs + 2 * lay.free_cp + 6, lay.flex + lay.free_cp + 6}) {
+    const double h = 1e-5;
+    Eigen::VectorXd xp = *x_, xm = *x_;
+    xp(j) += h;
+    xm(j) -= h;
+    Evaluation ep, em;
+    r.evaluate(xp, ep);
+    r.evaluate(xm, em);
+    const Eigen::VectorXd di = (ep.ineq - em.ineq).tail(extra) / (2 * h);
+    EXPECT_LT((ji.col(j).tail(extra) - di).cwiseAbs().maxCoeff(),
+              1e-3 * (1.0 + di.cwiseAbs().maxCoeff()))
+        << "column " << j;
+  }
+  EXPECT_THROW(OverstepProblem(*model_, PlannerConfig{}, ob, {{5, 0.5, 0.0}}), InputError);
+  EXPECT_THROW(OverstepProblem(*model_, PlannerConfig{}, ob, {{1, 1.5, 0.0}}), InputError);
 }
 
 // The derivatives are split over solver.threads workspaces: one thread and two give the same

@@ -1,6 +1,6 @@
 // Every leg capsule at least obstacle_clearance from the obstacle (at the homotopy's current
-// height), less its swept margin: one row, the smooth minimum (KS, smooth_min_rho) of the
-// distances (closed form, robots::obstacleDistance). Scale: kDistScale (m). One row per sample.
+// height), less its swept margin: one row, the smooth minimum (robots::softMin, smooth_min_rho) of
+// the distances (closed form, robots::obstacleDistance). Scale: kDistScale (m). One row per sample.
 #include "row_term.hpp"
 
 namespace overstep::planner::detail {
@@ -20,8 +20,7 @@ class ObstacleClearance final : public SampleTerm {
       for (int c : p.leg_caps[f])
         dist(i++) = robots::obstacleDistance(d.capsules[static_cast<std::size_t>(c)], og) -
                     d.sweep[static_cast<std::size_t>(c)];
-    out[0] =
-        (p.cfg.obstacle_clearance - robots::smoothMin(dist, p.cfg.smooth_min_rho)) / kDistScale;
+    out[0] = (p.cfg.obstacle_clearance - robots::softMin(dist, p.cfg.smooth_min_rho)) / kDistScale;
   }
 };
 

@@ -1,6 +1,6 @@
 // The capsule pairs a stepping motion can bring together (ProblemModel::self_pairs) at least
-// self_clearance apart, less their swept margins: one row, the smooth minimum (KS) of the
-// distances. Scale: kDistScale (m). One row per sample.
+// self_clearance apart, less their swept margins: one row, the smooth minimum (KS,
+// robots::smoothMin) of the distances. Scale: kDistScale (m). One row per sample.
 #include "row_term.hpp"
 
 namespace overstep::planner::detail {

@@ -1,5 +1,6 @@
 // The swing sole's four corners above the ground by ProblemModel::minHeight (seed: foot
-// clearance). Scale: kDistScale (m). Four rows per single-support sample.
+// clearance; at a mesh-refinement point, above the ground). Scale: kDistScale (m). Four rows per
+// single-support sample.
 #include "row_term.hpp"
 
 namespace overstep::planner::detail {
@@ -16,8 +17,12 @@ class SwingClearance final : public SampleTerm {
     const int sw = st.contact[kRight] ? kLeft : kRight;
     const auto& sole = p.foot[sw].sole;
     // At touchdown (s = 1) the switching rows pin the sole to the ground: corner rows there
-    // would duplicate them (degenerate constraints stall SLSQP), so they are kept inactive.
-    const double hmin = d.g->s == 1.0 ? -kDistScale : p.minHeight(d.g->s);
+    // would duplicate them (degenerate constraints stall SLSQP), so they are kept inactive. The
+    // smooth minimal height keeps the sole up between samples; a mesh-refinement point asks what
+    // the check asks there, the ground (the profile's 2.6 mm at a point 67 ms before the left
+    // touchdown, where the check had found a corner 1.5 mm in the ground, stalled a
+    // restoration 1.2 mm short).
+    const double hmin = d.g->s == 1.0 ? -kDistScale : d.g->refinement ? 0.0 : p.minHeight(d.g->s);
     const double xs[2] = {sole.x_front, -sole.x_back};
     const double ys[2] = {p.foot[sw].yMin(), p.foot[sw].yMax()};
     int r = 0;

@@ -42,4 +42,10 @@ struct CheckReport {
 CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& model,
                       double rate_hz = 1000.0, bool trace = false);
 
+/// Where the named families cross their tolerance on a traced report (checkPlan with trace):
+/// the worst instant (s) of each maximal run of grid points over the tolerance, in time order.
+/// Empty without a trace or without a crossing.
+std::vector<double> violationPeaks(const CheckReport& report,
+                                   const std::vector<std::string>& families);
+
 }  // namespace overstep::planner

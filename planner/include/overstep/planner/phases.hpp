@@ -36,6 +36,8 @@ struct GridPoint {
   int phase = 0;
   double s = 0.0;  ///< normalized time in the phase
   double t = 0.0;  ///< s since the start of the motion
+  /// A mesh-refinement point (OverstepProblem's check_points): rows only, at the check's bounds.
+  bool refinement = false;
 };
 
 class PhaseTiming {

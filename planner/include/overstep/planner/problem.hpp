@@ -30,6 +30,7 @@
 #include "overstep/core/obstacle.hpp"
 #include "overstep/core/plan.hpp"
 #include "overstep/planner/config.hpp"
+#include "overstep/planner/phases.hpp"
 #include "overstep/robots/whole_body_model.hpp"
 
 namespace overstep::planner {
@@ -83,8 +84,12 @@ struct WorkAccount {
 
 class OverstepProblem {
  public:
+  /// check_points: grid points (phase, s) added to the regular grid that carry the path
+  /// constraints (every row but the elastic dynamics' collocation) and no objective weight (mesh
+  /// refinement, where `overstep check` found a bound crossed between samples). A point within 1e-3
+  /// (in s) of another is dropped; checkPoints() lists the kept.
   OverstepProblem(const robots::WholeBodyModel& model, PlannerConfig config,
-                  core::ObstacleSpec obstacle);
+                  core::ObstacleSpec obstacle, std::vector<GridPoint> check_points = {});
   ~OverstepProblem();
   OverstepProblem(const OverstepProblem&) = delete;
   OverstepProblem& operator=(const OverstepProblem&) = delete;
@@ -96,6 +101,8 @@ class OverstepProblem {
   int equalityCount() const;
   const std::vector<Family>& inequalityFamilies() const;
   const std::vector<Family>& equalityFamilies() const;
+  /// The check points kept (constructor), sorted by phase and s.
+  const std::vector<GridPoint>& checkPoints() const;
   /// x of the start toes (front edge of the start soles); the obstacle gap is measured from it.
   double toesX() const;
 

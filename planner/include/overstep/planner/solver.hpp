@@ -79,6 +79,7 @@ struct RestorationResult {
   bool interrupted = false;
   bool timed_out = false;  ///< stopped by its time limit
   bool accepted = false;   ///< stopped because `accept` took a feasible iterate
+  int refusals = 0;        ///< feasible iterates `accept` refused
 };
 
 /// Judges a feasible solution vector by a finer measure than the rows at the samples (e.g. the
@@ -90,13 +91,16 @@ using AcceptFn = std::function<bool(const Eigen::VectorXd&)>;
 /// before each step; <= 0: no step at all). Without `accept` it aims at a tenth of
 /// kFeasibilityTolerance; with it, it also stops at the first iterate within `accept_below`
 /// (scaled violation; by default the feasibility tolerance) that `accept` takes (asked at the
-/// first such iterate, then after 5, 10, 20, ... more steps); asking changes no step.
+/// first such iterate, then after 5, 10, 20, ... more steps); asking changes no step. With
+/// `refusals_to_stop` > 0 it also stops, feasible and not accepted, once `accept` has refused
+/// that many iterates (the caller then refines where the finer measure fails).
 RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::VectorXd& x0,
                                      int max_iterations, const std::atomic<bool>* stop,
                                      const std::function<void(const IterationInfo&)>& on_iter,
                                      double time_limit_s = std::numeric_limits<double>::infinity(),
                                      const AcceptFn& accept = {},
-                                     double accept_below = kFeasibilityTolerance);
+                                     double accept_below = kFeasibilityTolerance,
+                                     int refusals_to_stop = 0);
 
 /// Runs the homotopy from the kinematic guess (after a feasibility restoration) to the target
 /// obstacle and CoP box; with `warm_start` (a solution vector of this problem's layout, e.g. a
