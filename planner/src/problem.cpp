@@ -108,17 +108,27 @@ void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at
   jeq.setZero(m.n_eq, n);
   const auto& lay = m.lay;
   std::atomic<int> next{0};
+  // Which grid points and switches a column changes, and how: a duration moves every sample's
+  // time (all re-evaluated); a placement only the states that read it (Impl::readsPlacement); a
+  // control point the samples and switches inside its B-spline support, where a double-support
+  // sample whose inverse-kinematics leg the control point belongs to changes in ds_leg_tracking
+  // alone (Impl::dsLegSplineChanged). Every value the shortcuts leave out is the same at x and at
+  // x + h (no difference to take).
+  enum class Change { None, Full, DsLegSpline };
   auto worker = [&](std::size_t wi) {
     Impl::Workspace& w = m.ws[wi];
     std::vector<SampleOut> local;
     std::vector<Eigen::VectorXd> local_events;
-    SampleOut tmp;
     Eigen::VectorXd tmp_event;
+    std::vector<Change> change(m.grid.size());
+    std::vector<const SampleOut*> ptr(m.grid.size());
+    std::vector<SampleOut> changed(m.grid.size());
+    bool event_changed[Impl::kEvents];
     for (int j = next++; j < n; j = next++) {
       Eigen::VectorXd xp = x;
       const double hj = 1e-6 * std::max(1.0, std::abs(x(j)));
       xp(j) += hj;
-      if (j < lay.legs) {  // durations and foot placements move everything
+      if (j < lay.feet) {  // a duration moves every sample
         m.evaluateAll(xp, w, local, local_events);
         Evaluation ev;
         m.assemble(w, local, local_events, ev);
@@ -127,46 +137,55 @@ void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at
         jeq.col(j) = (ev.eq - at.eq) / hj;
         continue;
       }
-      // A control point: only samples inside its B-spline support change.
       m.decode(xp, w);
-      const int curve_off = j < lay.flex ? lay.legs : lay.flex;
-      const int fi = (j - curve_off) % lay.free_cp;
-      int c_lo = fi + 2, c_hi = fi + 2;
-      if (fi == 0) c_lo = 0;
-      if (fi == 0) c_hi = 2;
-      if (fi == lay.free_cp - 1) {
-        c_lo = m.n_ctrl - 3;
-        c_hi = m.n_ctrl - 1;
-      }
-      const auto& knots = w.spline->knots();
-      const double t_lo = knots(c_lo), t_hi = knots(c_hi + w.spline->degree() + 1);
-      std::vector<const SampleOut*> ptr(m.base_samples.size());
-      std::vector<SampleOut> changed;
-      std::vector<int> changed_k;
-      changed.reserve(m.grid.size());
-      for (std::size_t k = 0; k < m.grid.size(); ++k) {
-        const double t = w.timing->timeOf(m.grid[k].phase, m.grid[k].s);
-        if (t >= t_lo - 1e-12 && t <= t_hi + 1e-12) {
-          changed_k.push_back(static_cast<int>(k));
-          changed.emplace_back();
+      if (j < lay.legs) {
+        const int v = (j - lay.feet) / 2;
+        for (std::size_t k = 0; k < m.grid.size(); ++k)
+          change[k] = m.readsPlacement(m.grid[k].phase, v) ? Change::Full : Change::None;
+        for (int e = 0; e < Impl::kEvents; ++e)
+          event_changed[e] = m.readsPlacement(Impl::eventPhase(e), v);
+      } else {
+        const int curve_off = j < lay.flex ? lay.legs : lay.flex;
+        const int fi = (j - curve_off) % lay.free_cp;
+        // The leg whose joint the control point belongs to (-1: a bushing coordinate).
+        const int leg = j < lay.flex ? (j - lay.legs) / lay.free_cp / 6 : -1;
+        int c_lo = fi + 2, c_hi = fi + 2;
+        if (fi == 0) c_lo = 0;
+        if (fi == 0) c_hi = 2;
+        if (fi == lay.free_cp - 1) {
+          c_lo = m.n_ctrl - 3;
+          c_hi = m.n_ctrl - 1;
         }
+        const auto& knots = w.spline->knots();
+        const double t_lo = knots(c_lo), t_hi = knots(c_hi + w.spline->degree() + 1);
+        auto inside = [&](double t) { return t >= t_lo - 1e-12 && t <= t_hi + 1e-12; };
+        for (std::size_t k = 0; k < m.grid.size(); ++k) {
+          const int phase = m.grid[k].phase;
+          change[k] = Change::None;
+          if (!inside(w.timing->timeOf(phase, m.grid[k].s))) continue;
+          const bool ik_leg = Impl::doubleSupport(phase) && leg == 1 - m.anchor_of[phase];
+          change[k] = ik_leg ? Change::DsLegSpline : Change::Full;
+        }
+        for (int e = 0; e < Impl::kEvents; ++e)
+          event_changed[e] = inside(w.timing->start(Impl::eventBoundary(e)));
       }
-      for (std::size_t i = 0; i < changed_k.size(); ++i) m.sampleRows(w, changed_k[i], changed[i]);
-      for (std::size_t k = 0; k < m.grid.size(); ++k) ptr[k] = &m.base_samples[k];
-      for (std::size_t i = 0; i < changed_k.size(); ++i) {
-        const int k = changed_k[i];
-        ptr[static_cast<std::size_t>(k)] = &changed[i];
-        jin.col(j).segment(m.ineq_off[static_cast<std::size_t>(k)],
-                           m.ineq_cnt[static_cast<std::size_t>(k)]) =
-            (changed[i].ineq - m.base_samples[static_cast<std::size_t>(k)].ineq) / hj;
-        jeq.col(j).segment(m.eq_off[static_cast<std::size_t>(k)],
-                           m.eq_cnt[static_cast<std::size_t>(k)]) =
-            (changed[i].eq - m.base_samples[static_cast<std::size_t>(k)].eq) / hj;
+      for (std::size_t k = 0; k < m.grid.size(); ++k) {
+        ptr[k] = &m.base_samples[k];
+        if (change[k] == Change::None) continue;
+        const SampleOut& base = m.base_samples[k];
+        if (change[k] == Change::DsLegSpline) {
+          m.dsLegSplineChanged(w, static_cast<int>(k), base, changed[k]);
+          ptr[k] = &changed[k];
+          continue;
+        }
+        m.sampleRows(w, static_cast<int>(k), changed[k]);
+        ptr[k] = &changed[k];
+        jin.col(j).segment(m.ineq_off[k], m.ineq_cnt[k]) = (changed[k].ineq - base.ineq) / hj;
+        jeq.col(j).segment(m.eq_off[k], m.eq_cnt[k]) = (changed[k].eq - base.eq) / hj;
       }
       grad(j) = (m.objective(w, ptr, nullptr) - at.objective) / hj;
       for (int e = 0; e < Impl::kEvents; ++e) {
-        const double te = w.timing->start(Impl::eventBoundary(e));
-        if (te < t_lo - 1e-12 || te > t_hi + 1e-12) continue;
+        if (!event_changed[e]) continue;
         m.eventRows(w, e, tmp_event);
         jeq.col(j).segment(m.event_eq_off[e], m.event_eq_cnt[e]) =
             (tmp_event - m.base_events[static_cast<std::size_t>(e)]) / hj;

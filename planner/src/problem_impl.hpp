@@ -24,6 +24,11 @@ struct OverstepProblem::Impl : ProblemModel {
   std::vector<std::unique_ptr<EventTerm>> event_terms;
   /// The sample costs switched on (weight != 0), with their slot in objectiveTermNames().
   std::vector<std::pair<int, std::unique_ptr<SampleCost>>> sample_costs;
+  /// The one sample cost that reads the double-support leg's spline (State::ik_seed_gap), when
+  /// switched on, and its slot: OverstepProblem::derivatives differentiates that spline's control
+  /// points at a double-support sample through it alone.
+  const SampleCost* ds_tracking = nullptr;
+  int ds_tracking_slot = -1;
   std::atomic<int> evaluations{0};
   WorkAccount work;
 
@@ -134,6 +139,11 @@ struct OverstepProblem::Impl : ProblemModel {
       if (cfg.weights.at(*it) != 0.0)
         sample_costs.emplace_back(static_cast<int>(it - names.begin()), std::move(cost));
     }
+    for (const auto& [slot, cost] : sample_costs) {
+      if (std::string(cost->name()) != "ds_leg_tracking") continue;
+      ds_tracking = cost.get();
+      ds_tracking_slot = slot;
+    }
     for (const auto& g : grid) {
       ineq_off.push_back(n_ineq);
       eq_off.push_back(n_eq);
@@ -186,13 +196,41 @@ struct OverstepProblem::Impl : ProblemModel {
     for (int f = 0; f < 3; ++f) w.feet[f] = x.segment<2>(lay.feet + 2 * f);
   }
 
+  /// Which placement variable (Workspace::feet: 0 right start, 1 right landing, 2 left landing)
+  /// says where a foot stands in a phase in which it is in contact; -1: the left start, the
+  /// world's reference.
+  static int placementVariable(int phase, int foot_index) {
+    if (foot_index == kLeft) return phase <= 2 ? -1 : 2;
+    return phase == 0 ? 0 : 1;
+  }
+  /// Whether the state at a grid point of `phase` depends on placement variable `v` (buildState
+  /// reads the anchor's placement, and in double support the other foot's).
+  bool readsPlacement(int phase, int v) const {
+    const int anchor = anchor_of[phase];
+    return placementVariable(phase, anchor) == v ||
+           (doubleSupport(phase) && placementVariable(phase, 1 - anchor) == v);
+  }
   /// Where a foot stands in a phase in which it is in contact.
   Eigen::Isometry3d footPlacement(int phase, int foot_index, const Workspace& w) const {
-    if (foot_index == kLeft)
-      return phase <= 2 ? placement(0.0, cfg.start_half_width)  // left start
-                        : placement(w.feet[2].x(), w.feet[2].y());
-    return phase == 0 ? placement(w.feet[0].x(), w.feet[0].y())  // right start
-                      : placement(w.feet[1].x(), w.feet[1].y());
+    const int v = placementVariable(phase, foot_index);
+    return v < 0 ? placement(0.0, cfg.start_half_width) : placement(w.feet[v].x(), w.feet[v].y());
+  }
+  /// |q_ik - seed|^2 of the double-support leg (State::ik_seed_gap): its inverse-kinematics
+  /// solution against its spline's values.
+  static double seedGap(const robots::Vector6d& q_ik, const robots::Vector6d& seed) {
+    double gap2 = 0.0;
+    for (int j = 0; j < 6; ++j) {
+      const double gap = q_ik(j) - seed(j);
+      gap2 += gap * gap;
+    }
+    return gap2;
+  }
+  /// The spline values of leg `leg`'s joints at time t (as buildState computes them).
+  robots::Vector6d legSpline(const Workspace& w, int leg, double t) const {
+    const PhaseSpline::Basis b = w.spline->evaluate(t);
+    const int nb = static_cast<int>(b.value.size());
+    const Eigen::VectorXd lq = w.legs_c.middleCols(b.first, nb) * b.value;
+    return lq.segment<6>(6 * leg);
   }
   Eigen::Isometry3d anchorPlacement(int phase, const Workspace& w) const {
     return footPlacement(phase, anchor_of[phase], w);
@@ -235,14 +273,13 @@ struct OverstepProblem::Impl : ProblemModel {
     st.reach = 0.0;
     st.ik_seed_gap = 0.0;
     if (ph.right_contact && ph.left_contact) {
-      Eigen::Matrix<double, 6, 1> seed;
+      robots::Vector6d seed;
       for (int j = 0; j < 6; ++j)
         seed(j) = st.q(leg_coord[static_cast<std::size_t>(6 * other + j)]);
       solveOtherLeg(w, other, otherPlacement(phase, w));
-      for (int j = 0; j < 6; ++j) {
-        const double gap = st.q(leg_coord[static_cast<std::size_t>(6 * other + j)]) - seed(j);
-        st.ik_seed_gap += gap * gap;
-      }
+      for (int j = 0; j < 6; ++j)
+        st.ik_leg(j) = st.q(leg_coord[static_cast<std::size_t>(6 * other + j)]);
+      st.ik_seed_gap = seedGap(st.ik_leg, seed);
     }
     st.J_sole[anchor] = m.frameJacobian(sole_frame[anchor]);  // the other's: solveOtherLeg
     st.tau = m.inverseDynamics();
@@ -724,6 +761,24 @@ struct OverstepProblem::Impl : ProblemModel {
     for (const auto& [slot, cost] : sample_costs)
       out.terms[static_cast<std::size_t>(slot)] = cost->value(*this, sd);
     out.tau = st.tau_act;
+    out.ik_leg = st.ik_leg;
+  }
+
+  /// Sample k of `base` as it is after a change of the double-support leg's spline alone (the
+  /// decode in w): in double support that spline only picks the leg's inverse-kinematics branch
+  /// (unchanged by a small change) and enters ds_leg_tracking, so the rows and every other term
+  /// keep their values. The same values as sampleRows at that decode, without its state.
+  void dsLegSplineChanged(const Workspace& w, int k, const SampleOut& base, SampleOut& out) const {
+    out = base;
+    if (!ds_tracking) return;
+    const GridPoint& g = grid[static_cast<std::size_t>(k)];
+    State st;
+    st.ik_seed_gap = seedGap(base.ik_leg, legSpline(w, 1 - anchor_of[g.phase], base.t));
+    SampleData sd;
+    sd.g = &g;
+    sd.t = base.t;
+    sd.st = &st;
+    out.terms[static_cast<std::size_t>(ds_tracking_slot)] = ds_tracking->value(*this, sd);
   }
 
   /// Switching rows at event e (instants t1..t4): the spline of the leg that changes

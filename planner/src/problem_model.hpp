@@ -78,6 +78,7 @@ struct SampleOut {
   Eigen::VectorXd eq;
   std::array<double, kObjectiveTerms> terms{};  // unweighted, normalised, per unit time
   Eigen::VectorXd tau;                          // actuated torques (for the torque-rate term)
+  robots::Vector6d ik_leg = robots::Vector6d::Zero();  // double support: State::ik_leg
   double t = 0.0;
 };
 
@@ -98,7 +99,8 @@ struct State {
   double ds_balance = 0.0;   // DS: unreachable ankle-moment balance about the feet's line, N m
   int lifting = -1;          // DS before a lift-off: the lifting foot
   double lift_weight = 1.0;  // and its share factor (1 - s) + eps
-  double ik_seed_gap = 0.0;  // DS: |IK leg - its spline|^2, rad^2
+  robots::Vector6d ik_leg = robots::Vector6d::Zero();  // DS: the IK leg's joints (chain order)
+  double ik_seed_gap = 0.0;                            // DS: |IK leg - its spline|^2, rad^2
 };
 
 /// What the problem knows before any variable is set: the robot and where its legs, feet and

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <nlopt.hpp>
+#include <optional>
 
 #include "overstep/core/error.hpp"
 
@@ -246,6 +247,10 @@ class NloptSolver final : public NlpSolver {
 
 /// Restoration steps after a stage that SLSQP left infeasible.
 constexpr int kPolishIterations = 400;
+/// Continuation step control: a stage that ends infeasible is solved again after a stage halfway
+/// between it and the last stage that ended feasible, from that stage's solution; at most this
+/// many such stages per solve.
+constexpr int kMaxBisections = 3;
 constexpr int kPolishRefusals = 3;  // the check's refusals that end the target stage's polish
 
 }  // namespace
@@ -450,6 +455,11 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     x = rest.x;
     out.iterations += rest.iterations;
   }
+  // The last stage that ended feasible (its parameters and solution): where a failed stage's
+  // bisection starts.
+  std::optional<std::pair<double, double>> good_stage;
+  Eigen::VectorXd good_x;
+  int bisections = 0;
   for (std::size_t i = 0; i < stages.size(); ++i) {
     problem.setDifficulty(stages[i].first, stages[i].second, i + 1 == stages.size());
     if (on_stage) {
@@ -503,6 +513,30 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
       out.final.objective = out.final.evaluation.objective;
       out.final.max_violation = polish.max_violation;
       if (polish.timed_out) out.final.status = "time_limit";
+    }
+    if (out.final.max_violation <= kFeasibilityTolerance) {
+      good_stage = stages[i];
+      good_x = x;
+    } else if (good_stage && bisections < kMaxBisections && !out.final.interrupted &&
+               elapsed() < time_limit_s) {
+      // Continuation step control: halve the step from the last feasible stage and come back.
+      const std::pair<double, double> mid{0.5 * (good_stage->first + stages[i].first),
+                                          0.5 * (good_stage->second + stages[i].second)};
+      if (std::abs(mid.first - stages[i].first) >= 2.5e-3 ||
+          std::abs(mid.second - stages[i].second) >= 2.5e-3) {
+        ++bisections;
+        if (on_stage) {
+          char buf[160];
+          std::snprintf(buf, sizeof buf,
+                        "stage %zu ended infeasible (%.4f): a stage at obstacle %.3f m, CoP box "
+                        "%.4f m first, from the last feasible stage's solution",
+                        i + 1, out.final.max_violation, mid.first, mid.second);
+          on_stage(buf);
+        }
+        stages.insert(stages.begin() + static_cast<std::ptrdiff_t>(i), mid);
+        x = good_x;
+        --i;  // the loop's ++i runs the inserted stage next
+      }
     }
   }
   if (out.final.x.size() == 0) endAt(x, "time_limit");  // no stage ran before the time limit

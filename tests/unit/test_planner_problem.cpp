@@ -235,6 +235,38 @@ TEST_F(Problem, DerivativesMatchCentralDifferences) {
   }
 }
 
+// The Jacobian re-evaluates only what a column changes (a placement: the states that read it; a
+// control point: its B-spline support, and at a double-support sample of its inverse-kinematics
+// leg only ds_leg_tracking): every column equals the forward difference of whole evaluations with
+// the same step, on the guess and on a restored point, with check points in the grid.
+TEST_F(Problem, DerivativesEqualForwardDifferencesOfWholeEvaluations) {
+  std::vector<GridPoint> extra = {{0, 0.45, 0.0}, {2, 0.3, 0.0}, {3, 0.6, 0.0}};
+  core::ObstacleSpec ob;
+  ob.height = 0.05;
+  OverstepProblem refined(*model_, PlannerConfig{}, ob, extra);
+  for (const Eigen::VectorXd& x : {*x_, restored()}) {
+    Evaluation e0;
+    refined.evaluate(x, e0);
+    Eigen::VectorXd g = Eigen::VectorXd::Constant(x.size(), std::nan(""));
+    Eigen::MatrixXd ji, je;
+    refined.derivatives(x, e0, g, ji, je);
+    for (int j = 0; j < x.size(); ++j) {
+      const double h = 1e-6 * std::max(1.0, std::abs(x(j)));
+      Eigen::VectorXd xp = x;
+      xp(j) += h;
+      Evaluation ep;
+      refined.evaluate(xp, ep);
+      const double fd = (ep.objective - e0.objective) / h;
+      ASSERT_NEAR(g(j), fd, 1e-6 * (1.0 + std::abs(fd))) << "objective, column " << j;
+      const Eigen::VectorXd di = (ep.ineq - e0.ineq) / h, de = (ep.eq - e0.eq) / h;
+      ASSERT_LE((ji.col(j) - di).cwiseAbs().maxCoeff(), 1e-6 * (1.0 + di.cwiseAbs().maxCoeff()))
+          << "inequalities, column " << j;
+      ASSERT_LE((je.col(j) - de).cwiseAbs().maxCoeff(), 1e-6 * (1.0 + de.cwiseAbs().maxCoeff()))
+          << "equalities, column " << j;
+    }
+  }
+}
+
 // Mesh refinement: check points carry the path constraints of their instant (not the elastic
 // dynamics) and no objective weight; a point on or next to a sample is dropped; the rows'
 // derivatives at them are right.
