@@ -96,7 +96,7 @@ TEST_F(DemoLcm, SmallObstacleRunWritesAConsistentVerdict) {
 // the identified overlay and the run after. The overlay must name the payload with its mass, the
 // re-plan must be a valid plan for the overlay (and not for the base model), and the run after
 // must track the plan better with less stabilizer correction (measured on this bar: tracking
-// 1.17 -> 0.93 mrad, effort 0.0064 -> 0.0051; docs/identification.md). About 2.5 min on 2 cores.
+// 0.92 -> 0.28 mrad, effort 0.0050 -> 0.0015; docs/identification.md). About 2.5 min on 2 cores.
 TEST_F(DemoLcm, IdentifyLoopReducesTrackingErrorAndEffortWithAPayload) {
   test::TempDir dir;
   test::writeText(dir.path() / "payload.yaml",
@@ -122,7 +122,12 @@ TEST_F(DemoLcm, IdentifyLoopReducesTrackingErrorAndEffortWithAPayload) {
   EXPECT_EQ(test::runOverstep("check " + after_plan).code, 2) << "a plan for the base model?";
   const json &before = out["before"], &after = out["after"];
   ASSERT_TRUE(after.is_object()) << out.dump(2);
-  EXPECT_TRUE(before["cleared"].get<bool>());
+  // The run before executes a plan for the wrong model: it must step over the bar without a
+  // fall or a touch, but it need not come to rest (on the current 5 cm plan its base still moves
+  // at 4 cm/s 3 s after the plan; docs/identification.md). The run after must clear outright.
+  for (const char* k : {"finished", "feet_beyond_obstacle"})
+    EXPECT_TRUE(before[k].get<bool>()) << k;
+  for (const char* k : {"fell", "obstacle_contact"}) EXPECT_FALSE(before[k].get<bool>()) << k;
   EXPECT_TRUE(after["cleared"].get<bool>());
   EXPECT_TRUE(after["plan_valid"].get<bool>());
   for (const char* k : {"tracking_rms", "stabilizer_effort"}) {
