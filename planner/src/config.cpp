@@ -101,6 +101,7 @@ std::string PlannerConfig::toJson() const {
   nlohmann::json j;
   j["samples_per_phase"] = samples_per_phase;
   j["spline_intervals"] = spline_intervals;
+  j["flex_spline_intervals"] = flex_spline_intervals;
   j["duration_min"] = duration_min;
   j["duration_max"] = duration_max;
   j["duration_guess"] = duration_guess;
@@ -143,8 +144,11 @@ static PlannerConfig loadPlannerConfigFile(const std::string& path) {
                                     [&](const ConfigEntry& e) { return key == e.key; });
     if (entry != configTable().end()) {
       c.*(entry->field) = inRange(v, key, entry->lo, entry->hi, entry->open_low);
-    } else if (key == "samples_per_phase" || key == "spline_intervals") {
-      auto& out = key == "samples_per_phase" ? c.samples_per_phase : c.spline_intervals;
+    } else if (key == "samples_per_phase" || key == "spline_intervals" ||
+               key == "flex_spline_intervals") {
+      auto& out = key == "samples_per_phase"  ? c.samples_per_phase
+                  : key == "spline_intervals" ? c.spline_intervals
+                                              : c.flex_spline_intervals;
       out = r.perPhase<int>(v, key);
       for (int n : out)
         if (n > 200) r.fail(key, "expected at most 200 per phase, got " + std::to_string(n));

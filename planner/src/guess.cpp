@@ -31,15 +31,17 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
   x.segment<2>(lay.feet + 4) = L1;
 
   const PhaseTiming timing(x.head(kPhaseCount));
-  PhaseSpline spline(c.spline_intervals);
+  PhaseSpline spline(c.spline_intervals), flex_spline(c.flex_spline_intervals);
   spline.setTiming(timing);
+  flex_spline.setTiming(timing);
   robots::WholeBodyModel& model = *m.ws.front().model;
   const double z_rest = m.q_rest(5);
   const double z_top = m.height + c.guess_swing_clearance;
 
   const int M = 240;
   Eigen::MatrixXd Y(16, M);
-  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(M, m.n_ctrl);
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(M, m.n_ctrl),
+                  Bf = Eigen::MatrixXd::Zero(M, m.n_ctrl_flex);
   Eigen::VectorXd q = m.q_rest;
   for (int k = 0; k < M; ++k) {
     const double t = timing.total() * k / (M - 1);
@@ -136,28 +138,32 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
     for (int j = 0; j < 4; ++j) Y(12 + j, k) = q(m.flex_coord[static_cast<std::size_t>(j)]);
     const PhaseSpline::Basis b = spline.evaluate(t);
     B.block(k, b.first, 1, b.value.size()) = b.value.transpose();
+    const PhaseSpline::Basis bf = flex_spline.evaluate(t);
+    Bf.block(k, bf.first, 1, bf.value.size()) = bf.value.transpose();
   }
-  // Least-squares fit of the free control points (ties: first three, last three).
-  const int F = lay.free_cp;
-  Eigen::MatrixXd P = Eigen::MatrixXd::Zero(m.n_ctrl, F);
-  P.block(0, 0, 3, 1).setOnes();
-  for (int i = 1; i < F - 1; ++i) P(i + 2, i) = 1.0;
-  P.block(m.n_ctrl - 3, F - 1, 3, 1).setOnes();
-  Eigen::MatrixXd A(M + F, F);
-  A.topRows(M) = B * P;
-  A.bottomRows(F) = 1e-3 * Eigen::MatrixXd::Identity(F, F);
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  // Least-squares fit of the free control points (ties: first three, last three), regularised
+  // toward each curve's mean.
   Eigen::VectorXd lo, hi;
   bounds(lo, hi);
-  for (int j = 0; j < 16; ++j) {
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(M + F);
-    rhs.head(M) = Y.row(j).transpose();
-    // Regularise toward the mean rather than zero.
-    const double mean = Y.row(j).mean();
-    rhs.tail(F).setConstant(1e-3 * mean);
-    const int off = j < 12 ? lay.legs + j * F : lay.flex + (j - 12) * F;
-    x.segment(off, F) = qr.solve(rhs);
-  }
+  auto fit = [&](const Eigen::MatrixXd& basis, int rows_from, int count, int offset, int F) {
+    const int n_ctrl = static_cast<int>(basis.cols());
+    Eigen::MatrixXd P = Eigen::MatrixXd::Zero(n_ctrl, F);
+    P.block(0, 0, 3, 1).setOnes();
+    for (int i = 1; i < F - 1; ++i) P(i + 2, i) = 1.0;
+    P.block(n_ctrl - 3, F - 1, 3, 1).setOnes();
+    Eigen::MatrixXd A(M + F, F);
+    A.topRows(M) = basis * P;
+    A.bottomRows(F) = 1e-3 * Eigen::MatrixXd::Identity(F, F);
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+    for (int j = 0; j < count; ++j) {
+      Eigen::VectorXd rhs = Eigen::VectorXd::Zero(M + F);
+      rhs.head(M) = Y.row(rows_from + j).transpose();
+      rhs.tail(F).setConstant(1e-3 * Y.row(rows_from + j).mean());
+      x.segment(offset + j * F, F) = qr.solve(rhs);
+    }
+  };
+  fit(B, 0, 12, lay.legs, lay.free_cp);
+  fit(Bf, 12, 4, lay.flex, lay.flex_free_cp);
   return x.cwiseMax(lo).cwiseMin(hi);
 }
 

@@ -66,8 +66,8 @@ void OverstepProblem::bounds(Eigen::VectorXd& lo, Eigen::VectorXd& hi) const {
     lo.segment(lay.legs + j * lay.free_cp, lay.free_cp).setConstant(a.safeLower());
     hi.segment(lay.legs + j * lay.free_cp, lay.free_cp).setConstant(a.safeUpper());
   }
-  lo.segment(lay.flex, 4 * lay.free_cp).setConstant(-0.15);
-  hi.segment(lay.flex, 4 * lay.free_cp).setConstant(0.15);
+  lo.segment(lay.flex, 4 * lay.flex_free_cp).setConstant(-0.15);
+  hi.segment(lay.flex, 4 * lay.flex_free_cp).setConstant(0.15);
 }
 
 Eigen::VectorXd OverstepProblem::variableScale() const {
@@ -145,19 +145,22 @@ void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at
         for (int e = 0; e < Impl::kEvents; ++e)
           event_changed[e] = m.readsPlacement(Impl::eventPhase(e), v);
       } else {
-        const int curve_off = j < lay.flex ? lay.legs : lay.flex;
-        const int fi = (j - curve_off) % lay.free_cp;
+        const bool is_leg = j < lay.flex;
+        const int F = is_leg ? lay.free_cp : lay.flex_free_cp;
+        const int n_ctrl = is_leg ? m.n_ctrl : m.n_ctrl_flex;
+        const PhaseSpline& spline = is_leg ? *w.spline : *w.flex_spline;
+        const int fi = (j - (is_leg ? lay.legs : lay.flex)) % F;
         // The leg whose joint the control point belongs to (-1: a bushing coordinate).
-        const int leg = j < lay.flex ? (j - lay.legs) / lay.free_cp / 6 : -1;
+        const int leg = is_leg ? (j - lay.legs) / lay.free_cp / 6 : -1;
         int c_lo = fi + 2, c_hi = fi + 2;
         if (fi == 0) c_lo = 0;
         if (fi == 0) c_hi = 2;
-        if (fi == lay.free_cp - 1) {
-          c_lo = m.n_ctrl - 3;
-          c_hi = m.n_ctrl - 1;
+        if (fi == F - 1) {
+          c_lo = n_ctrl - 3;
+          c_hi = n_ctrl - 1;
         }
-        const auto& knots = w.spline->knots();
-        const double t_lo = knots(c_lo), t_hi = knots(c_hi + w.spline->degree() + 1);
+        const auto& knots = spline.knots();
+        const double t_lo = knots(c_lo), t_hi = knots(c_hi + spline.degree() + 1);
         auto inside = [&](double t) { return t >= t_lo - 1e-12 && t <= t_hi + 1e-12; };
         for (std::size_t k = 0; k < m.grid.size(); ++k) {
           const int phase = m.grid[k].phase;

@@ -12,9 +12,9 @@ using namespace detail;  // NOLINT: internal header
 struct OverstepProblem::Impl : ProblemModel {
   struct Workspace {
     std::unique_ptr<robots::WholeBodyModel> model;
-    std::unique_ptr<PhaseSpline> spline;
-    Eigen::MatrixXd legs_c, flex_c;  // full control points (12 x C, 4 x C)
-    Eigen::Vector2d feet[3];         // right start, right landing, left landing
+    std::unique_ptr<PhaseSpline> spline, flex_spline;  // legs, ankle bushings
+    Eigen::MatrixXd legs_c, flex_c;                    // full control points (12 x C, 4 x C_flex)
+    Eigen::Vector2d feet[3];                           // right start, right landing, left landing
     std::unique_ptr<PhaseTiming> timing;
     State st;
     SampleData sample;  // what the sample terms read (capsules reused between samples)
@@ -102,15 +102,17 @@ struct OverstepProblem::Impl : ProblemModel {
     cop_box = cfg.cop_box;
     obstacle_geom = robots::ObstacleGeometry::fromSpec(obstacle, toes_x);
 
-    PhaseSpline probe(cfg.spline_intervals);
-    n_ctrl = probe.controlPointCount();
+    n_ctrl = PhaseSpline(cfg.spline_intervals).controlPointCount();
+    n_ctrl_flex = PhaseSpline(cfg.flex_spline_intervals).controlPointCount();
     lay.free_cp = n_ctrl - 4;
+    lay.flex_free_cp = n_ctrl_flex - 4;
     if (lay.free_cp < 2) throw InputError("planner: spline_intervals too small");
+    if (lay.flex_free_cp < 2) throw InputError("planner: flex_spline_intervals too small");
     lay.durations = 0;
     lay.feet = kPhaseCount;
     lay.legs = lay.feet + 6;
     lay.flex = lay.legs + VariableLayout::kLegJoints * lay.free_cp;
-    lay.total = lay.flex + VariableLayout::kFlex * lay.free_cp;
+    lay.total = lay.flex + VariableLayout::kFlex * lay.flex_free_cp;
 
     // Grid and row layout.
     // Single-support phases are sampled on their closed interval (s = 0 .. 1): the stance ankle
@@ -174,13 +176,15 @@ struct OverstepProblem::Impl : ProblemModel {
     for (auto& w : ws) {
       w.model = std::make_unique<robots::WholeBodyModel>(model_template);
       w.spline = std::make_unique<PhaseSpline>(cfg.spline_intervals);
+      w.flex_spline = std::make_unique<PhaseSpline>(cfg.flex_spline_intervals);
     }
   }
 
   // -------------------------------------------------------------- decoding x
-  void expand(const Eigen::VectorXd& x, int offset,
-              Eigen::Ref<Eigen::RowVectorXd, 0, Eigen::InnerStride<>> c) const {
-    const int F = lay.free_cp;
+  /// The full control points of a curve from its F free ones at x(offset..): the first and the
+  /// last free point each stand for three tied ones (rest at the start and the end).
+  static void expand(const Eigen::VectorXd& x, int offset, int F,
+                     Eigen::Ref<Eigen::RowVectorXd, 0, Eigen::InnerStride<>> c) {
     c.head(3).setConstant(x(offset));
     for (int i = 1; i < F - 1; ++i) c(i + 2) = x(offset + i);
     c.tail(3).setConstant(x(offset + F - 1));
@@ -189,10 +193,13 @@ struct OverstepProblem::Impl : ProblemModel {
   void decode(const Eigen::VectorXd& x, Workspace& w) const {
     w.timing = std::make_unique<PhaseTiming>(x.head(kPhaseCount));
     w.spline->setTiming(*w.timing);
+    w.flex_spline->setTiming(*w.timing);
     w.legs_c.resize(12, n_ctrl);
-    w.flex_c.resize(4, n_ctrl);
-    for (int j = 0; j < 12; ++j) expand(x, lay.legs + j * lay.free_cp, w.legs_c.row(j));
-    for (int j = 0; j < 4; ++j) expand(x, lay.flex + j * lay.free_cp, w.flex_c.row(j));
+    w.flex_c.resize(4, n_ctrl_flex);
+    for (int j = 0; j < 12; ++j)
+      expand(x, lay.legs + j * lay.free_cp, lay.free_cp, w.legs_c.row(j));
+    for (int j = 0; j < 4; ++j)
+      expand(x, lay.flex + j * lay.flex_free_cp, lay.flex_free_cp, w.flex_c.row(j));
     for (int f = 0; f < 3; ++f) w.feet[f] = x.segment<2>(lay.feet + 2 * f);
   }
 
@@ -248,11 +255,12 @@ struct OverstepProblem::Impl : ProblemModel {
     st.v.setZero(n);
     st.a.setZero(n);
     const PhaseSpline::Basis b = w.spline->evaluate(t);
+    const PhaseSpline::Basis bf = w.flex_spline->evaluate(t);
     const int nb = static_cast<int>(b.value.size());
     const auto legs = w.legs_c.middleCols(b.first, nb);
-    const auto flex = w.flex_c.middleCols(b.first, nb);
+    const auto flex = w.flex_c.middleCols(bf.first, static_cast<int>(bf.value.size()));
     const Eigen::VectorXd lq = legs * b.value, lv = legs * b.d1, la = legs * b.d2;
-    const Eigen::VectorXd fq = flex * b.value, fv = flex * b.d1, fa = flex * b.d2;
+    const Eigen::VectorXd fq = flex * bf.value, fv = flex * bf.d1, fa = flex * bf.d2;
     for (int j = 0; j < 12; ++j) {
       st.q(leg_coord[static_cast<std::size_t>(j)]) = lq(j);
       st.v(leg_coord[static_cast<std::size_t>(j)]) = lv(j);
@@ -496,22 +504,33 @@ struct OverstepProblem::Impl : ProblemModel {
     };
     std::size_t phase_first = 0;  // first sample of the current phase
     auto blendToZero = [&](std::size_t k_end) {
-      const double t0 = when[phase_first].first, L = when[k_end].first - t0;
-      if (L <= 1e-9) return;
-      // Quintic blend: the correction, its rate and its acceleration all reach zero at the
-      // lift-off and all start from zero at the phase's start.
+      const double t_end = when[k_end].first;
+      const double L_phase = t_end - when[phase_first].first;
+      if (L_phase <= 1e-9) return;
       const Eigen::VectorXd dT = D[k_end], vT = DV[k_end], aT = DA[k_end];
-      for (std::size_t k = phase_first; k <= k_end; ++k) {
-        const double x = (when[k].first - t0) / L, x2 = x * x, x3 = x2 * x;
-        const double hv = 10 * x3 - 15 * x3 * x + 6 * x3 * x2;
-        const double hv1 = 30 * x2 - 60 * x3 + 30 * x3 * x, hv2 = 60 * x - 180 * x2 + 120 * x3;
-        const double hd = -4 * x3 + 7 * x3 * x - 3 * x3 * x2;
-        const double hd1 = -12 * x2 + 28 * x3 - 15 * x3 * x, hd2 = -24 * x + 84 * x2 - 60 * x3;
-        const double ha = 0.5 * x3 - x3 * x + 0.5 * x3 * x2;
-        const double ha1 = 1.5 * x2 - 4 * x3 + 2.5 * x3 * x, ha2 = 3 * x - 12 * x2 + 10 * x3;
-        D[k] -= dT * hv + vT * (L * hd) + aT * (L * L * ha);
-        DV[k] -= (dT * hv1 + vT * (L * hd1) + aT * (L * L * ha1)) / L;
-        DA[k] -= (dT * hv2 + vT * (L * hd2) + aT * (L * L * ha2)) / (L * L);
+      const int phase = when[k_end].second;
+      for (Eigen::Index c = 0; c < dT.size(); ++c) {
+        // Quintic blend: the correction, its rate and its acceleration all reach zero at the
+        // switch. A stance bushing (the slow mode of the whole body swaying on it) is blended
+        // over the whole phase; a swinging foot's bushing (its own fast, overdamped mode) over
+        // kSwingBlend before the switch: spread over the phase, its rate at the switch times the
+        // phase's length had left a 1-2 N m hump of residual mid-swing (measured).
+        const bool swing = dT.size() == 4 && !inContact(phase, static_cast<int>(c) / 2);
+        const double L = swing ? std::min(L_phase, kSwingBlend) : L_phase;
+        const double t0 = t_end - L;
+        for (std::size_t k = phase_first; k <= k_end; ++k) {
+          if (when[k].first < t0) continue;
+          const double x = (when[k].first - t0) / L, x2 = x * x, x3 = x2 * x;
+          const double hv = 10 * x3 - 15 * x3 * x + 6 * x3 * x2;
+          const double hv1 = 30 * x2 - 60 * x3 + 30 * x3 * x, hv2 = 60 * x - 180 * x2 + 120 * x3;
+          const double hd = -4 * x3 + 7 * x3 * x - 3 * x3 * x2;
+          const double hd1 = -12 * x2 + 28 * x3 - 15 * x3 * x, hd2 = -24 * x + 84 * x2 - 60 * x3;
+          const double ha = 0.5 * x3 - x3 * x + 0.5 * x3 * x2;
+          const double ha1 = 1.5 * x2 - 4 * x3 + 2.5 * x3 * x, ha2 = 3 * x - 12 * x2 + 10 * x3;
+          D[k](c) -= dT(c) * hv + vT(c) * (L * hd) + aT(c) * (L * L * ha);
+          DV[k](c) -= (dT(c) * hv1 + vT(c) * (L * hd1) + aT(c) * (L * L * ha1)) / L;
+          DA[k](c) -= (dT(c) * hv2 + vT(c) * (L * hd2) + aT(c) * (L * L * ha2)) / (L * L);
+        }
       }
       d = D[k_end];
       dv = DV[k_end];

@@ -34,6 +34,9 @@ inline constexpr double kDistScale = 0.05;       // m, scale of clearance/distan
 inline constexpr double kJointScale = 0.1;       // rad
 inline constexpr double kFlexTorqueScale = 5.0;  // N m
 inline constexpr double kKsSharpness = 40.0;
+// s: the passive polish blends a swinging foot's bushing correction to zero over this window
+// before its touchdown (OverstepProblem::Impl::polishPassive).
+inline constexpr double kSwingBlend = 0.1;
 // Lift-off rows: scale of the lifting foot's normal-force row, a fraction of the weight.
 inline constexpr double kLiftOffNormal = 0.03;
 // Double-support wrench split (distributeWrench).
@@ -120,7 +123,8 @@ struct ProblemModel {
   /// pelvis at pelvis_margin and the lifting foot's load share ramped (liftWeight).
   bool last_stage = true;
   VariableLayout lay;
-  int n_ctrl = 0;  // control points per curve
+  int n_ctrl = 0;       // control points per leg joint curve
+  int n_ctrl_flex = 0;  // control points per ankle-bushing curve
   double mass = 0.0, mg = 0.0, toes_x = 0.13;
   std::array<int, 12> leg_coord{};  // model coordinates of RLEG_JOINT0-5, LLEG_JOINT0-5
   std::array<int, 12> leg_act{};    // actuated indices

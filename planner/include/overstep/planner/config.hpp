@@ -23,7 +23,12 @@ struct SolverSettings {
 
 struct PlannerConfig {
   std::array<int, kPhaseCount> samples_per_phase{9, 12, 9, 12, 9};
-  std::array<int, kPhaseCount> spline_intervals{3, 6, 3, 6, 3};  ///< cubic B-spline spans
+  std::array<int, kPhaseCount> spline_intervals{3, 6, 3, 6, 3};  ///< cubic B-spline spans (legs)
+  /// Cubic B-spline spans of the ankle-bushing coordinates. In single support their equations of
+  /// motion are collocated at every sample: one span per sample interval there gives the curve a
+  /// degree of freedom per collocation row, so the bushings can meet their dynamics without
+  /// bending the legs.
+  std::array<int, kPhaseCount> flex_spline_intervals{3, 12, 3, 12, 3};
   std::array<double, kPhaseCount> duration_min{0.4, 0.7, 0.15, 0.7, 0.4};
   std::array<double, kPhaseCount> duration_max{1.2, 2.0, 1.0, 2.0, 1.2};
   std::array<double, kPhaseCount> duration_guess{0.8, 1.5, 0.6, 1.5, 0.8};

@@ -59,7 +59,8 @@ struct VariableLayout {
   int feet = 5;
   int legs = 11;
   int flex = 0;
-  int free_cp = 0;
+  int free_cp = 0;       ///< free control points per leg joint curve
+  int flex_free_cp = 0;  ///< free control points per ankle-bushing curve
   int total = 0;
   static constexpr int kLegJoints = 12;
   static constexpr int kFlex = 4;
