@@ -1,5 +1,7 @@
 // `overstep plan` and `overstep check`.
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -132,6 +134,40 @@ planner::WorkAccount refineByCheck(planner::OverstepProblem& problem, planner::N
   return extra;
 }
 
+/// A warm start's solution vector is laid out by its configuration's spline spans: the same
+/// spans or an InputError naming the key (two layouts can have the same length). Plans written
+/// before the bushing curves had their own spans used the legs' (`spline_intervals`).
+void checkWarmLayout(const std::string& path, const core::Plan& plan,
+                     const planner::PlannerConfig& cfg) {
+  const nlohmann::json pc = nlohmann::json::parse(plan.config_json, nullptr, false);
+  if (!pc.is_object()) throw InputError(path + ": no planner configuration to read its layout");
+  auto spans = [&](const char* key, const char* fallback) {
+    const nlohmann::json& v = pc.contains(key)        ? pc[key]
+                              : pc.contains(fallback) ? pc[fallback]
+                                                      : pc;
+    const bool ok = v.is_array() && v.size() == planner::kPhaseCount &&
+                    std::all_of(v.begin(), v.end(),
+                                [](const nlohmann::json& n) { return n.is_number_integer(); });
+    if (!ok) throw InputError(path + ": its configuration has no " + key + " (5 integers)");
+    return v.get<std::vector<int>>();
+  };
+  auto text = [](const std::vector<int>& v) {
+    std::string t;
+    for (int n : v) t += (t.empty() ? "" : ", ") + std::to_string(n);
+    return "[" + t + "]";
+  };
+  const std::pair<const char*, const std::array<int, planner::kPhaseCount>*> keys[] = {
+      {"spline_intervals", &cfg.spline_intervals},
+      {"flex_spline_intervals", &cfg.flex_spline_intervals}};
+  for (const auto& [key, mine] : keys) {
+    const std::vector<int> theirs = spans(key, "spline_intervals");
+    const std::vector<int> ours(mine->begin(), mine->end());
+    if (theirs != ours)
+      throw InputError(path + ": its " + key + " " + text(theirs) + " differ from this " +
+                       "configuration's " + text(ours) + " (give --config the plan's spans)");
+  }
+}
+
 /// Beyond this the swing sole cannot be lifted over the bar at all (hip below 0.65 m, leg 0.6 m
 /// plus foot): answer at once instead of searching.
 constexpr double kReachableHeight = 0.45;
@@ -227,6 +263,7 @@ int runPlan(const PlanOptions& o) {
     const nlohmann::json ws = nlohmann::json::parse(wp.summary_json, nullptr, false);
     if (!ws.is_object() || !ws.contains("x") || !ws["x"].is_array())
       throw InputError(o.warm_start + ": no solution vector (summary.x) to start from");
+    checkWarmLayout(o.warm_start, wp, cfg);
     const auto xs = ws["x"].get<std::vector<double>>();
     warm = Eigen::Map<const Eigen::VectorXd>(xs.data(), static_cast<Eigen::Index>(xs.size()));
     if (warm.size() != problem.layout().total)

@@ -461,12 +461,13 @@ struct OverstepProblem::Impl : ProblemModel {
   /// U delta to q (U delta', U delta'' to v, a): the motion the robot's passive joints make under
   /// the planned actuated trajectories. Corrections are of the order of 1e-4 rad; the actuated
   /// joints are untouched. At a contact switch delta is carried over by least squares.
-  /// Before a lift-off the correction is blended back to zero (quintic Hermite over the double-
-  /// support phase: value, rate and acceleration): there the unloading foot's whole wrench must
+  /// Before each contact switch the correction is blended back to zero (quintic Hermite: value,
+  /// rate and acceleration; blendToZero): a stance bushing's over the whole single-support phase,
+  /// the swinging foot's over the last kSwingBlend before its touchdown; double support keeps the
+  /// solver's motion (clearDoubleSupport). At a lift-off the unloading foot's whole wrench must
   /// vanish, and the correction's spring torque (k delta) would reappear as a moment on a foot that
   /// carries no load (measured: 0.27 N m under 2 N, a CoP 11 cm off, 4 ms before the first
-  /// lift-off). The blend leaves that torque as a residual of the passive dynamics instead, spread
-  /// over the phase.
+  /// lift-off). The blend leaves that torque as a residual of the passive dynamics instead.
   void polishPassive(Workspace& w, const std::vector<std::pair<double, int>>& when,
                      std::vector<Eigen::VectorXd>& q, std::vector<Eigen::VectorXd>& v,
                      std::vector<Eigen::VectorXd>& a) const {

@@ -141,7 +141,8 @@ struct ProblemModel {
   std::vector<CapsuleRef> caps;
   std::vector<int> leg_caps[2];  // capsules of each leg (indices into caps)
   std::vector<std::pair<int, int>> self_pairs;
-  robots::ObstacleGeometry obstacle_geom;
+  robots::ObstacleGeometry
+      obstacle_geom;       // the target bar (the obstacle row of a leg on the ground)
   Eigen::VectorXd q_rest;  // half-sitting (upper body posture held)
 
   std::vector<GridPoint> grid;  // (phase, s); t filled per evaluation

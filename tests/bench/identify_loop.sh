@@ -5,7 +5,7 @@
 # stabilizer effort before (the plan for the base model) and after (the warm re-plan for the
 # identified overlay), and the same plan run without the payload as the reference.
 # The truth: 1.5 kg on CHEST_LINK1 at (0.05, 0, 0.10) m (override with TRUTH=file.yaml).
-# START_PLAN=plan.json (a valid default plan) skips the 6-7 min of planning the first run needs
+# START_PLAN=plan.json (a valid default plan) skips the ~2.5 min of planning the first run needs
 # (`--plan`: the run before is that plan, and the re-plan starts from it).
 # Needs root (a private network namespace for LCM, tests/integration/netns_run.sh).
 # Usage: [START_PLAN=plan.json] [TRUTH=truth.yaml] tests/bench/identify_loop.sh [BUILD_DIR] [SEED...]

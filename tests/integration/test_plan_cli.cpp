@@ -183,6 +183,14 @@ TEST(PlanCli, SmallObstaclePlansWithTheDefaultBoxAndPassesCheck) {
   const RunResult bad = run("plan --obstacle-height 0.05 --config " + dir.file("other.yaml") +
                             " --warm-start " + written + " --out " + dir.file("x.json"));
   EXPECT_EQ(bad.code, 2) << bad.err;
+  // Also one whose vector has the same length but another layout (the bushing spans moved
+  // between the single supports).
+  test::writeText(dir.path() / "same_length.yaml", "flex_spline_intervals: [3, 11, 3, 13, 3]\n");
+  const RunResult moved =
+      run("plan --obstacle-height 0.05 --config " + dir.file("same_length.yaml") +
+          " --warm-start " + written + " --out " + dir.file("y.json"));
+  EXPECT_EQ(moved.code, 2) << moved.err;
+  EXPECT_NE(moved.err.find("flex_spline_intervals"), std::string::npos) << moved.err;
 }
 
 }  // namespace

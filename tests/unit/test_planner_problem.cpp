@@ -137,6 +137,34 @@ TEST_F(Problem, RestorationStopsWhereAcceptTakesAPoint) {
   EXPECT_LT(stopped.iterations, plain.iterations);
 }
 
+// The height homotopy raises the bar under a swinging leg only: the obstacle row of a sample
+// whose legs are both on the ground reads the target bar at every stage; a single-support row
+// reads the stage's bar (lower bar, more clearance).
+TEST_F(Problem, TheHomotopyRaisesTheBarUnderTheSwingingLegOnly) {
+  core::ObstacleSpec ob;
+  ob.height = 0.20;
+  OverstepProblem p(*model_, PlannerConfig{}, ob);
+  const Eigen::VectorXd x = p.initialGuess();
+  Evaluation low, target;
+  p.setDifficulty(0.05, 0.04, false);
+  p.evaluate(x, low);
+  p.setDifficulty(0.20, 0.04, false);
+  p.evaluate(x, target);
+  int ds = 0, ss_lower = 0;
+  for (int r = 0; r < p.inequalityCount(); ++r) {
+    if (p.inequalityFamilies()[static_cast<std::size_t>(r)] != Family::ObstacleCollision) continue;
+    const std::string where = p.describeRow(x, false, r);
+    if (where.find("(ds_") != std::string::npos) {
+      EXPECT_EQ(low.ineq(r), target.ineq(r)) << where;
+      ++ds;
+    } else if (low.ineq(r) < target.ineq(r)) {
+      ++ss_lower;  // the swinging leg sees the 5 cm bar: farther from it
+    }
+  }
+  EXPECT_GT(ds, 20);
+  EXPECT_GT(ss_lower, 5);
+}
+
 TEST_F(Problem, LayoutAndRowFamiliesAreConsistent) {
   const auto& lay = problem_->layout();
   EXPECT_EQ(lay.total, 5 + 6 + 12 * lay.free_cp + 4 * lay.flex_free_cp);
@@ -295,14 +323,14 @@ TEST_F(Problem, CheckPointsAddRowsButLeaveTheObjective) {
   EXPECT_EQ(more.objective, base.objective);
   EXPECT_EQ(more.ineq.head(base.ineq.size()), base.ineq);  // the samples' rows come first
   // The added rows' derivatives against central differences (a duration moves every point; a
-  // control point near the swing's check point moves it).
+  // leg and a bushing control point whose support holds the swing's check point move it).
   Eigen::VectorXd g;
   Eigen::MatrixXd ji, je;
   OverstepProblem& r = refined;
   r.derivatives(*x_, more, g, ji, je);
   const auto& lay = r.layout();
   const int extra = r.inequalityCount() - problem_->inequalityCount();
-  for (int j : {1, 2, lay.legs + 2 * lay.free_cp + 6, lay.flex + lay.flex_free_cp + 12}) {
+  for (int j : {1, 2, lay.legs + 2 * lay.free_cp + 6, lay.flex + lay.flex_free_cp + 6}) {
     const double h = 1e-5;
     Eigen::VectorXd xp = *x_, xm = *x_;
     xp(j) += h;
@@ -311,6 +339,7 @@ TEST_F(Problem, CheckPointsAddRowsButLeaveTheObjective) {
     r.evaluate(xp, ep);
     r.evaluate(xm, em);
     const Eigen::VectorXd di = (ep.ineq - em.ineq).tail(extra) / (2 * h);
+    EXPECT_GT(di.cwiseAbs().maxCoeff(), 0.0) << "column " << j << " moves no check-point row";
     EXPECT_LT((ji.col(j).tail(extra) - di).cwiseAbs().maxCoeff(),
               1e-3 * (1.0 + di.cwiseAbs().maxCoeff()))
         << "column " << j;
@@ -465,6 +494,28 @@ TEST_F(Problem, PassivePolishChangesOnlySingleSupportAndKeepsTheLiftOffs) {
     for (int e = 0; e < model_->elasticCount(); ++e) {
       const int c = model_->elasticCoordinate(e);
       EXPECT_NEAR(p1.q(c, k), p0.q(c, k), 1e-9) << "t = " << p1.t(k);
+    }
+  }
+  // And before each touchdown: the last single-support sample is the solver's own motion (the
+  // stance bushings blended back over the phase, the swinging foot's over the last 0.1 s), while
+  // the swinging foot's bushing is corrected earlier in its swing.
+  for (int k = 0; k + 1 < p1.samples(); ++k) {
+    const int ph = p1.phase(k), next = p1.phase(k + 1);
+    if (!((ph == 1 && next == 2) || (ph == 3 && next == 4))) continue;
+    const int swing_leg = ph == 1 ? 0 : 1;  // elastic joints: right roll, pitch, left roll, pitch
+    double early = 0.0;
+    for (int i = 0; i < k; ++i) {
+      if (p1.phase(i) != ph || p1.t(i) > p1.t(k) - 0.15) continue;
+      for (int e = 2 * swing_leg; e < 2 * swing_leg + 2; ++e) {
+        const int c = model_->elasticCoordinate(e);
+        early = std::max(early, std::abs(p1.q(c, i) - p0.q(c, i)));
+      }
+    }
+    EXPECT_GT(early, 1e-6) << "touchdown at t = " << p1.t(k);
+    for (int e = 0; e < model_->elasticCount(); ++e) {
+      const int c = model_->elasticCoordinate(e);
+      EXPECT_NEAR(p1.q(c, k), p0.q(c, k), 1e-9) << "touchdown at t = " << p1.t(k);
+      EXPECT_NEAR(p1.v(c, k), p0.v(c, k), 1e-7) << "touchdown at t = " << p1.t(k);
     }
   }
 }

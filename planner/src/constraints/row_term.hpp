@@ -40,7 +40,7 @@ class SampleTerm {
 };
 
 /// What the row terms of a contact switch read: the state of the double-support phase at the
-/// switch (ProblemModel::eventPhase) and the splines' basis there.
+/// switch (ProblemModel::eventPhase) and the leg spline's basis there.
 struct EventData {
   int event = 0;  ///< 0..3: t1 (end of phase 0), t2 (start of 2), t3 (end of 2), t4 (start of 4)
   const State* st = nullptr;

@@ -27,7 +27,7 @@ struct PlannerConfig {
   /// Cubic B-spline spans of the ankle-bushing coordinates. In single support their equations of
   /// motion are collocated at every sample: one span per sample interval there gives the curve a
   /// degree of freedom per collocation row, so the bushings can meet their dynamics without
-  /// bending the legs.
+  /// bending the legs (keep the single-support entries equal to samples_per_phase's).
   std::array<int, kPhaseCount> flex_spline_intervals{3, 12, 3, 12, 3};
   std::array<double, kPhaseCount> duration_min{0.4, 0.7, 0.15, 0.7, 0.4};
   std::array<double, kPhaseCount> duration_max{1.2, 2.0, 1.0, 2.0, 1.2};

@@ -6,9 +6,11 @@
 ///   [0, 5)     phase durations T_i, s
 ///   [5, 11)    foot placements: right start (x, y), right landing (x, y), left landing (x, y), m
 ///   then       leg joints: 12 cubic B-splines (RLEG_JOINT0-5, LLEG_JOINT0-5), free control points
-///   then       elastic ankle coordinates: 4 cubic B-splines, free control points
+///   then       elastic ankle coordinates: 4 cubic B-splines on their own knot spans
+///              (flex_spline_intervals), free control points
 /// The first three and the last three control points of every curve are tied (rest at start and
-/// end), so each curve has (spans + 3) - 4 free control points. The upper body holds half-sitting.
+/// end), so each curve has (spans + 3) - 4 free control points (VariableLayout::free_cp for the
+/// legs, flex_free_cp for the bushings). The upper body holds half-sitting.
 ///
 /// At every sample the floating base follows from the phase's anchor foot lying flat at its
 /// placement (robots::WholeBodyModel::anchorBase); in double support the other leg is solved by
