@@ -1,6 +1,7 @@
 // `overstep demo`: options, the verdict printed; the run itself is the demo library
 // (overstep/demo/demo.hpp).
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <ctime>
@@ -85,6 +86,36 @@ void printVerdict(const json& v) {
     std::printf("figures: %s\n", v["report"].get<std::string>().c_str());
 }
 
+/// With --plan the simulated bar is the plan's: obstacle options left out are taken from it, and
+/// one given that differs is refused (a 5 cm plan replayed in front of the default 20 cm bar
+/// walks its shank into it). `given` lists the obstacle options on the command line.
+void obstacleFromPlan(DemoOptions& o, const std::vector<std::string>& given) {
+  if (o.plan.empty() || !std::filesystem::is_regular_file(o.plan)) return;
+  const core::ObstacleSpec ob = core::loadPlan(o.plan).obstacle;
+  const std::string shape = ob.shape == core::ObstacleSpec::Shape::Box ? "box" : "cylinder";
+  const auto same = [](double a, double b) { return std::abs(a - b) <= 1e-9; };
+  const auto metres = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g m", v);
+    return std::string(buf);
+  };
+  const auto agree = [&](const std::string& name, bool equal, const std::string& planned) {
+    if (!equal && std::find(given.begin(), given.end(), name) != given.end())
+      throw InputError(name + " differs from the plan's obstacle (" + o.plan + ": " + planned +
+                       "); leave it out to simulate the plan's bar");
+  };
+  agree("--obstacle-height", same(o.height, ob.height), metres(ob.height));
+  agree("--obstacle-width", same(o.width, ob.width), metres(ob.width));
+  agree("--obstacle-gap", same(o.gap, ob.gap), metres(ob.gap));
+  agree("--obstacle-shape", o.shape == shape, shape);
+  agree("--margin", same(o.margin, ob.margin), metres(ob.margin));
+  o.height = ob.height;
+  o.width = ob.width;
+  o.gap = ob.gap;
+  o.shape = shape;
+  o.margin = ob.margin;
+}
+
 int runDemo(const DemoOptions& o) {
   checkOptions(o);
   const fs::path run = o.run_dir.empty() ? fs::path(o.run_root) / utcStamp() : fs::path(o.run_dir);
@@ -158,8 +189,9 @@ void registerDemoCommand(CLI::App& app, cli::Registry& registry) {
                   "Wall-time limit of the planner, s (default: its configuration's)");
   sub->add_flag("--replan", o->replan, "Ignore the plan cache");
   sub->add_option("--plan", o->plan,
-                  "Replay this plan file instead of planning (its validity: overstep check; with "
-                  "--identify: the run before, and the re-plan starts from it)");
+                  "Replay this plan file instead of planning (its validity: overstep check; the "
+                  "simulated bar is the plan's; with --identify: the run before, and the re-plan "
+                  "starts from it)");
   sub->add_flag("--no-report", o->no_report, "Skip the figures (overstep report) at the end");
   sub->add_flag("--allow-invalid-plan", o->allow_invalid,
                 "Replay the planner's best attempt when no plan passes the check");
@@ -177,7 +209,14 @@ void registerDemoCommand(CLI::App& app, cli::Registry& registry) {
       "  overstep demo --plan plan.json --truth truth.yaml --identify --seed 2\n"
       "Writes RUN_DIR/{plan.json, bus.lcmlog, replay.json, sim.json, verdict.json}.\n"
       "Exit: 0 cleared, 2 bad input, 3 no valid plan, 4 the robot did not clear the obstacle.");
-  registry.add(sub, [o] { return runDemo(*o); });
+  registry.add(sub, [o, sub] {
+    std::vector<std::string> given;
+    for (const char* name : {"--obstacle-height", "--obstacle-width", "--obstacle-gap",
+                             "--obstacle-shape", "--margin"})
+      if (sub->count(name) > 0) given.emplace_back(name);
+    obstacleFromPlan(*o, given);
+    return runDemo(*o);
+  });
 }
 
 }  // namespace overstep
