@@ -1,6 +1,8 @@
 #pragma once
 // Internal to the planner library: the problem's private state, shared by problem.cpp, guess.cpp
 // and to_plan.cpp. Not installed, not included by users.
+#include <Eigen/Sparse>
+
 #include "constraints/row_term.hpp"
 #include "costs/cost_term.hpp"
 #include "problem_model.hpp"
@@ -411,6 +413,17 @@ struct OverstepProblem::Impl : ProblemModel {
     return r;
   }
 
+  /// In single support: the four elastic joints' residuals (N m) and the stance sole's CoP (m,
+  /// sole frame), what the passive polish corrects and what it must leave in place.
+  Eigen::VectorXd residualAndCop(Workspace& w, int phase) const {
+    const int stance = inContact(phase, kRight) ? kRight : kLeft;
+    Eigen::Vector3d mo, fo;
+    soleWrench(w.st, stance, mo, fo);
+    Eigen::VectorXd r(6);
+    r << passiveResidual(w, phase), -mo.y() / fo.z(), mo.x() / fo.z();
+    return r;
+  }
+
   /// Directions (columns, tangent space) in which the passive coordinates can move with every
   /// actuated joint held and the stance sole(s) fixed: single support, each elastic joint with the
   /// base following the stance foot; double support, the whole body rotating about the line
@@ -455,19 +468,18 @@ struct OverstepProblem::Impl : ProblemModel {
 
   /// Makes the passive coordinates obey their equations of motion between the collocation
   /// samples. The planner enforces the elastic joints' dynamics only at its samples; between them
-  /// the dense motion leaves a residual F(t) (N m). This integrates the linearised correction
-  /// delta along the passive directions U (A delta'' + B delta' + C delta = -F, A, B, C by finite
-  /// differences at every dense sample; Newmark average acceleration, 1 ms steps) and adds
-  /// U delta to q (U delta', U delta'' to v, a): the motion the robot's passive joints make under
-  /// the planned actuated trajectories. Corrections are of the order of 1e-4 rad; the actuated
-  /// joints are untouched. At a contact switch delta is carried over by least squares.
-  /// Before each contact switch the correction is blended back to zero (quintic Hermite: value,
-  /// rate and acceleration; blendToZero): a stance bushing's over the whole single-support phase,
-  /// the swinging foot's over the last kSwingBlend before its touchdown; double support keeps the
-  /// solver's motion (clearDoubleSupport). At a lift-off the unloading foot's whole wrench must
-  /// vanish, and the correction's spring torque (k delta) would reappear as a moment on a foot that
-  /// carries no load (measured: 0.27 N m under 2 N, a CoP 11 cm off, 4 ms before the first
-  /// lift-off). The blend leaves that torque as a residual of the passive dynamics instead.
+  /// the dense motion leaves a residual F(t) (N m). In each single-support phase this finds the
+  /// correction delta along the passive directions U (the linearised residual F + A delta'' +
+  /// B delta' + C delta, A, B, C by finite differences at every dense sample) that removes it in
+  /// the least-squares sense (smoothPassive) and adds U delta to q (U delta', U delta'' to v, a):
+  /// the motion the robot's passive joints make under the planned actuated trajectories.
+  /// Corrections are of the order of 1e-4 rad; the actuated joints are untouched. The correction
+  /// is zero, with its rate, at every contact switch, and double support keeps the solver's
+  /// motion: at a lift-off the unloading foot's whole wrench must vanish, and a correction's
+  /// spring torque (k delta) would reappear as a moment on a foot that carries no load
+  /// (measured: 0.27 N m under 2 N, a CoP 11 cm off, 4 ms before the first lift-off); in double
+  /// support a correction moved the lightly loaded landing foot's moments (1.3 mm of CoP beyond
+  /// the box 40 ms after the 20 cm run's second touchdown).
   void polishPassive(Workspace& w, const std::vector<std::pair<double, int>>& when,
                      std::vector<Eigen::VectorXd>& q, std::vector<Eigen::VectorXd>& v,
                      std::vector<Eigen::VectorXd>& a) const {
@@ -478,141 +490,123 @@ struct OverstepProblem::Impl : ProblemModel {
     const double h = 1e-5;
     for (std::size_t k = 0; k < n; ++k) {
       const int phase = when[k].second;
+      if (doubleSupport(phase)) continue;
       U[k] = passiveDirections(w, phase, q[k]);
       const int c = static_cast<int>(U[k].cols());
       stateFrom(w, phase, when[k].first, q[k], v[k], a[k]);
-      F[k] = passiveResidual(w, phase);
-      A[k].resize(c, c);
-      B[k].resize(c, c);
-      C[k].resize(c, c);
+      F[k] = residualAndCop(w, phase);
+      A[k].resize(c + 2, c);
+      B[k].resize(c + 2, c);
+      C[k].resize(c + 2, c);
       for (int j = 0; j < c; ++j) {
         stateFrom(w, phase, when[k].first, q[k], v[k], a[k] + h * U[k].col(j));
-        A[k].col(j) = (passiveResidual(w, phase) - F[k]) / h;
+        A[k].col(j) = (residualAndCop(w, phase) - F[k]) / h;
         stateFrom(w, phase, when[k].first, q[k], v[k] + h * U[k].col(j), a[k]);
-        B[k].col(j) = (passiveResidual(w, phase) - F[k]) / h;
+        B[k].col(j) = (residualAndCop(w, phase) - F[k]) / h;
         stateFrom(w, phase, when[k].first, m.integrate(q[k], U[k].col(j), h), v[k], a[k]);
-        C[k].col(j) = (passiveResidual(w, phase) - F[k]) / h;
+        C[k].col(j) = (residualAndCop(w, phase) - F[k]) / h;
       }
     }
-    // Newmark (beta 1/4, gamma 1/2) on each interval between dense samples, in <= 1 ms steps.
-    Eigen::VectorXd d = Eigen::VectorXd::Zero(U[0].cols()), dv = d, da = d;
-    da = -A[0].fullPivLu().solve(F[0]);
     std::vector<Eigen::VectorXd> D(n), DV(n), DA(n);
-    auto store = [&](std::size_t k) {
-      D[k] = d;
-      DV[k] = dv;
-      DA[k] = da;
-    };
-    std::size_t phase_first = 0;  // first sample of the current phase
-    auto blendToZero = [&](std::size_t k_end) {
-      const double t_end = when[k_end].first;
-      const double L_phase = t_end - when[phase_first].first;
-      if (L_phase <= 1e-9) return;
-      const Eigen::VectorXd dT = D[k_end], vT = DV[k_end], aT = DA[k_end];
-      const int phase = when[k_end].second;
-      for (Eigen::Index c = 0; c < dT.size(); ++c) {
-        // Quintic blend: the correction, its rate and its acceleration all reach zero at the
-        // switch. A stance bushing (the slow mode of the whole body swaying on it) is blended
-        // over the whole phase; a swinging foot's bushing (its own fast, overdamped mode) over
-        // kSwingBlend before the switch: spread over the phase, its rate at the switch times the
-        // phase's length had left a 1-2 N m hump of residual mid-swing (measured).
-        const bool swing = dT.size() == 4 && !inContact(phase, static_cast<int>(c) / 2);
-        const double L = swing ? std::min(L_phase, kSwingBlend) : L_phase;
-        const double t0 = t_end - L;
-        for (std::size_t k = phase_first; k <= k_end; ++k) {
-          if (when[k].first < t0) continue;
-          const double x = (when[k].first - t0) / L, x2 = x * x, x3 = x2 * x;
-          const double hv = 10 * x3 - 15 * x3 * x + 6 * x3 * x2;
-          const double hv1 = 30 * x2 - 60 * x3 + 30 * x3 * x, hv2 = 60 * x - 180 * x2 + 120 * x3;
-          const double hd = -4 * x3 + 7 * x3 * x - 3 * x3 * x2;
-          const double hd1 = -12 * x2 + 28 * x3 - 15 * x3 * x, hd2 = -24 * x + 84 * x2 - 60 * x3;
-          const double ha = 0.5 * x3 - x3 * x + 0.5 * x3 * x2;
-          const double ha1 = 1.5 * x2 - 4 * x3 + 2.5 * x3 * x, ha2 = 3 * x - 12 * x2 + 10 * x3;
-          D[k](c) -= dT(c) * hv + vT(c) * (L * hd) + aT(c) * (L * L * ha);
-          DV[k](c) -= (dT(c) * hv1 + vT(c) * (L * hd1) + aT(c) * (L * L * ha1)) / L;
-          DA[k](c) -= (dT(c) * hv2 + vT(c) * (L * hd2) + aT(c) * (L * L * ha2)) / (L * L);
-        }
-      }
-      d = D[k_end];
-      dv = DV[k_end];
-      da = DA[k_end];
-    };
-    auto apply = [&](std::size_t k) {
-      d = D[k];
-      dv = DV[k];
-      da = DA[k];
-      // U keeps the anchor sole fixed to first order; re-anchoring the base keeps it exactly.
-      const auto& ph = phaseTable()[static_cast<std::size_t>(when[k].second)];
+    for (std::size_t k0 = 0; k0 < n;) {
+      std::size_t k1 = k0;
+      while (k1 + 1 < n && when[k1 + 1].second == when[k0].second) ++k1;
+      if (!doubleSupport(when[k0].second)) smoothPassive(when, U, A, B, C, F, k0, k1, D, DV, DA);
+      k0 = k1 + 1;
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      if (D[k].size() == 0) continue;  // double support, or a phase too short to correct
+      // U keeps the stance sole fixed to first order; re-anchoring the base keeps it exactly.
       const int anchor = anchor_of[when[k].second];
       m.setPositions(q[k]);
       const Eigen::Isometry3d X = m.framePose(sole_frame[anchor]);
-      q[k] = m.integrate(q[k], U[k] * d, 1.0);
-      v[k] += U[k] * dv;
-      a[k] += U[k] * da;
+      q[k] = m.integrate(q[k], U[k] * D[k], 1.0);
+      v[k] += U[k] * DV[k];
+      a[k] += U[k] * DA[k];
       m.anchorBase(sole_frame[anchor], X, q[k], v[k], a[k]);
-      if (ph.right_contact && ph.left_contact) {
-        // The other sole back onto its placement exactly (the correction moves it by second-order
-        // amounts): its leg's joints by inverse kinematics, as buildState() does.
-        w.st.q = q[k];
-        w.st.v = v[k];
-        w.st.a = a[k];
-        solveOtherLeg(w, 1 - anchor, otherPlacement(when[k].second, w));
-        q[k] = w.st.q;
-        v[k] = w.st.v;
-        a[k] = w.st.a;
-      }
-    };
-    store(0);
-    for (std::size_t k = 0; k + 1 < n; ++k) {
-      if (when[k + 1].second != when[k].second) {
-        blendToZero(k);
-        phase_first = k + 1;
-        // Contact switch: carry the correction over by least squares in the new directions.
-        const auto ls = U[k + 1].colPivHouseholderQr();
-        const Eigen::VectorXd d2 = ls.solve(U[k] * d), dv2 = ls.solve(U[k] * dv);
-        d = d2;
-        dv = dv2;
-        // The acceleration from the new phase's equations (the contact wrench may jump).
-        da = A[k + 1].fullPivLu().solve(-F[k + 1] - B[k + 1] * dv - C[k + 1] * d);
-        store(k + 1);
-        continue;
-      }
-      const double T = when[k + 1].first - when[k].first;
-      const int steps = std::max(1, static_cast<int>(std::ceil(T / 1e-3)));
-      const double dt = T / steps;
-      for (int s = 1; s <= steps; ++s) {
-        const double f = static_cast<double>(s) / steps;
-        const Eigen::MatrixXd As = (1 - f) * A[k] + f * A[k + 1];
-        const Eigen::MatrixXd Bs = (1 - f) * B[k] + f * B[k + 1];
-        const Eigen::MatrixXd Cs = (1 - f) * C[k] + f * C[k + 1];
-        const Eigen::VectorXd Fs = (1 - f) * F[k] + f * F[k + 1];
-        const Eigen::VectorXd vp = dv + 0.5 * dt * da;
-        const Eigen::VectorXd dp = d + dt * dv + 0.25 * dt * dt * da;
-        const Eigen::MatrixXd K = As + 0.5 * dt * Bs + 0.25 * dt * dt * Cs;
-        const Eigen::VectorXd an = K.fullPivLu().solve(-Fs - Bs * vp - Cs * dp);
-        d = dp + 0.25 * dt * dt * an;
-        dv = vp + 0.5 * dt * an;
-        da = an;
-      }
-      store(k + 1);
     }
-    clearDoubleSupport(when, D, DV, DA);
-    for (std::size_t k = 0; k < n; ++k) apply(k);
   }
 
-  /// No correction in double support. There the solver's own motion leaves
-  /// only the sway-balance band (ds_balance_band) as the passive residual, while the integrated
-  /// correction moved the lightly loaded landing foot's moments: 1.3 mm of CoP beyond the box
-  /// 40 ms after the 20 cm run's second touchdown, even ramped in over 0.1 s (measured).
-  static void clearDoubleSupport(const std::vector<std::pair<double, int>>& when,
-                                 std::vector<Eigen::VectorXd>& D, std::vector<Eigen::VectorXd>& DV,
-                                 std::vector<Eigen::VectorXd>& DA) {
-    for (std::size_t k = 0; k < when.size(); ++k) {
-      const auto& ph = phaseTable()[static_cast<std::size_t>(when[k].second)];
-      if (!(ph.right_contact && ph.left_contact)) continue;
-      D[k].setZero();
-      DV[k].setZero();
-      DA[k].setZero();
+  /// The passive correction of one single-support phase, samples [k0, k1]: the delta (along U)
+  /// minimising sum_k |R_k(delta)|^2 / kPolishResidual^2 + |P_k(delta)|^2 / kPolishCop^2 +
+  /// |delta_k|^2 / kPolishDeflection^2, where [R; P]_k = F_k + A_k delta''_k + B_k delta'_k +
+  /// C_k delta_k stacks the linearised residuals (R, N m; their value F) and the stance CoP's
+  /// change (P, m; residualAndCop), the derivatives by three-point differences on the samples,
+  /// delta held at zero on the phase's first two and last two samples (the solver's own motion,
+  /// its value and rate, at both contact switches). A boundary-value problem over the phase:
+  /// integrating the equations forward from the lift-off instead (Newmark) accumulated the
+  /// residual's mean between the collocation samples through the slow mode of the body swaying
+  /// on its stance bushing, 3.9 mrad of stance roll by mid-swing on the bar 5 mm farther, and the
+  /// pelvis left its range; without the CoP term the correction's rotation of the body on that
+  /// bushing moved the CoP 2.1 mm beyond the check's tolerance on the bar 5 mm nearer (measured,
+  /// docs/history/planner.md).
+  void smoothPassive(const std::vector<std::pair<double, int>>& when,
+                     const std::vector<Eigen::MatrixXd>& U, const std::vector<Eigen::MatrixXd>& A,
+                     const std::vector<Eigen::MatrixXd>& B, const std::vector<Eigen::MatrixXd>& C,
+                     const std::vector<Eigen::VectorXd>& F, std::size_t k0, std::size_t k1,
+                     std::vector<Eigen::VectorXd>& D, std::vector<Eigen::VectorXd>& DV,
+                     std::vector<Eigen::VectorXd>& DA) const {
+    if (k1 < k0 + 4) return;
+    const int c = static_cast<int>(U[k0].cols());
+    for (std::size_t k = k0; k <= k1; ++k) {
+      D[k] = Eigen::VectorXd::Zero(c);
+      DV[k] = D[k];
+      DA[k] = D[k];
+    }
+    const std::size_t first = k0 + 2, last = k1 - 2;  // free samples
+    const int unknowns = c * static_cast<int>(last - first + 1);
+    auto col = [&](std::size_t k) { return c * static_cast<int>(k - first); };
+    auto free = [&](std::size_t k) { return k >= first && k <= last; };
+    // Three-point weights of delta' and delta'' at k on its neighbours (k-1, k, k+1).
+    auto stencil = [&](std::size_t k, double d1[3], double d2[3]) {
+      const double h1 = when[k].first - when[k - 1].first, h2 = when[k + 1].first - when[k].first;
+      d1[0] = -h2 / (h1 * (h1 + h2));
+      d1[1] = (h2 - h1) / (h1 * h2);
+      d1[2] = h1 / (h2 * (h1 + h2));
+      d2[0] = 2.0 / (h1 * (h1 + h2));
+      d2[1] = -2.0 / (h1 * h2);
+      d2[2] = 2.0 / (h2 * (h1 + h2));
+    };
+    // Rows per free sample: the c residuals (their value F, weight 1 / kPolishResidual), the
+    // stance CoP's change (1 / kPolishCop) and the correction itself (1 / kPolishDeflection).
+    const int per = 2 * c + 2;
+    Eigen::VectorXd weight(c + 2);
+    weight << Eigen::VectorXd::Constant(c, 1.0 / kPolishResidual), 1.0 / kPolishCop,
+        1.0 / kPolishCop;
+    std::vector<Eigen::Triplet<double>> trip;
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(per * (unknowns / c));
+    int row = 0;
+    for (std::size_t k = first; k <= last; ++k, row += per) {
+      double d1[3], d2[3];
+      stencil(k, d1, d2);
+      for (int j = 0; j < 3; ++j) {
+        const std::size_t kk = k - 1 + static_cast<std::size_t>(j);
+        if (!free(kk)) continue;
+        const Eigen::MatrixXd M =
+            weight.asDiagonal() * (d2[j] * A[k] + d1[j] * B[k] + (kk == k ? 1.0 : 0.0) * C[k]);
+        for (int r = 0; r < c + 2; ++r)
+          for (int q = 0; q < c; ++q)
+            if (M(r, q) != 0.0) trip.emplace_back(row + r, col(kk) + q, M(r, q));
+      }
+      rhs.segment(row, c) = -F[k].head(c) / kPolishResidual;
+      for (int i = 0; i < c; ++i)
+        trip.emplace_back(row + c + 2 + i, col(k) + i, 1.0 / kPolishDeflection);
+    }
+    Eigen::SparseMatrix<double> J(row, unknowns);
+    J.setFromTriplets(trip.begin(), trip.end());
+    const Eigen::SparseMatrix<double> JtJ = J.transpose() * J;
+    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(JtJ);
+    const Eigen::VectorXd x = ldlt.solve(J.transpose() * rhs);
+    if (ldlt.info() != Eigen::Success || !x.allFinite()) return;  // no correction
+    auto at = [&](std::size_t k) -> Eigen::VectorXd {
+      return free(k) ? Eigen::VectorXd(x.segment(col(k), c)) : Eigen::VectorXd::Zero(c);
+    };
+    for (std::size_t k = first; k <= last; ++k) {
+      double d1[3], d2[3];
+      stencil(k, d1, d2);
+      D[k] = at(k);
+      DV[k] = d1[0] * at(k - 1) + d1[1] * at(k) + d1[2] * at(k + 1);
+      DA[k] = d2[0] * at(k - 1) + d2[1] * at(k) + d2[2] * at(k + 1);
     }
   }
 

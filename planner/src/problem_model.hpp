@@ -34,9 +34,12 @@ inline constexpr double kDistScale = 0.05;       // m, scale of clearance/distan
 inline constexpr double kJointScale = 0.1;       // rad
 inline constexpr double kFlexTorqueScale = 5.0;  // N m
 inline constexpr double kKsSharpness = 40.0;
-// s: the passive polish blends a swinging foot's bushing correction to zero over this window
-// before its touchdown (OverstepProblem::Impl::polishPassive).
-inline constexpr double kSwingBlend = 0.1;
+// The passive polish's least-squares weights (OverstepProblem::Impl::smoothPassive): the
+// residual of the bushings' equations it accepts (N m) against the change of the stance CoP (m)
+// and the correction (rad) it makes.
+inline constexpr double kPolishResidual = 0.1;
+inline constexpr double kPolishCop = 1e-3;
+inline constexpr double kPolishDeflection = 2e-3;
 // Lift-off rows: scale of the lifting foot's normal-force row, a fraction of the weight.
 inline constexpr double kLiftOffNormal = 0.03;
 // Double-support wrench split (distributeWrench).

@@ -458,10 +458,10 @@ TEST_F(Problem, PassivePolishChangesOnlySingleSupportAndKeepsTheLiftOffs) {
   const core::Plan p1 = problem_->toPlan(restored(), 200.0);
   // The polish makes the bushings obey their dynamics between the samples: on this unconverged
   // point (bushing curves with a span per sample interval, free between the samples) the
-  // single-support residual is 10.0 N m unpolished and 1.30 N m polished (measured); the blend
-  // back to the solver's motion before each switch leaves the rest.
-  EXPECT_LT(elasticResidual(p1, true), 0.5 * elasticResidual(p0, true));
-  EXPECT_LT(elasticResidual(p1, true), 2.0);
+  // single-support residual is 10.0 N m unpolished and 0.56 N m polished (measured; 1.30 with
+  // the forward integration blended back before each switch), within the check's 1 N m.
+  EXPECT_LT(elasticResidual(p1, true), 0.1 * elasticResidual(p0, true));
+  EXPECT_LT(elasticResidual(p1, true), 1.0);
   ASSERT_EQ(p0.samples(), p1.samples());
   double joint_change = 0.0, elastic_change = 0.0;
   for (int k = 0; k < p0.samples(); ++k) {
@@ -475,15 +475,18 @@ TEST_F(Problem, PassivePolishChangesOnlySingleSupportAndKeepsTheLiftOffs) {
       elastic_change = std::max(elastic_change, std::abs(p1.q(c, k) - p0.q(c, k)));
     }
   }
+  // A boundary-value problem over each phase does not drift: the correction stays at the size
+  // of the residual over the bushing stiffness (2.2 mrad measured), where a forward integration
+  // let the slow sway mode carry it to 3.9 mrad on a converged plan.
   EXPECT_GT(elastic_change, 0.0);
-  EXPECT_LT(elastic_change, 0.05);
+  EXPECT_LT(elastic_change, 0.01);
   EXPECT_LT(joint_change, 0.05);
   // In double support the plan is the solver's own motion (the polish is single support only).
   for (int k = 0; k < p1.samples(); ++k) {
     if (p1.phase(k) % 2 != 0) continue;  // phases 0, 2, 4 are double support
     EXPECT_LT((p1.q.col(k) - p0.q.col(k)).cwiseAbs().maxCoeff(), 1e-9) << "t = " << p1.t(k);
   }
-  // The polish blends the correction back to zero before each lift-off: there the plan is the
+  // The correction is zero at each lift-off: there the plan is the
   // solver's own, whose unloading foot carries nothing (lift-off rows).
   for (int k = 0; k + 1 < p1.samples(); ++k) {
     const int ph = p1.phase(k), next = p1.phase(k + 1);
@@ -496,9 +499,9 @@ TEST_F(Problem, PassivePolishChangesOnlySingleSupportAndKeepsTheLiftOffs) {
       EXPECT_NEAR(p1.q(c, k), p0.q(c, k), 1e-9) << "t = " << p1.t(k);
     }
   }
-  // And before each touchdown: the last single-support sample is the solver's own motion (the
-  // stance bushings blended back over the phase, the swinging foot's over the last 0.1 s), while
-  // the swinging foot's bushing is corrected earlier in its swing.
+  // And before each touchdown: the last single-support sample is the solver's own motion, value
+  // and rate (the correction held at zero on the phase's last two samples), while the swinging
+  // foot's bushing is corrected earlier in its swing.
   for (int k = 0; k + 1 < p1.samples(); ++k) {
     const int ph = p1.phase(k), next = p1.phase(k + 1);
     if (!((ph == 1 && next == 2) || (ph == 3 && next == 4))) continue;
