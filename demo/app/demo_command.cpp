@@ -86,12 +86,19 @@ void printVerdict(const json& v) {
     std::printf("figures: %s\n", v["report"].get<std::string>().c_str());
 }
 
-/// With --plan the simulated bar is the plan's: obstacle options left out are taken from it, and
-/// one given that differs is refused (a 5 cm plan replayed in front of the default 20 cm bar
-/// walks its shank into it). `given` lists the obstacle options on the command line.
+/// With --plan of a plan that steps over its bar, the simulated bar is the plan's: obstacle
+/// options left out are taken from it, and one given that differs is refused (a 5 cm plan
+/// replayed in front of the default 20 cm bar walks its shank into it). A plan that does not
+/// step (`plan --stand`, `--excite`) stands before whatever bar the options place. `given`
+/// lists the obstacle options on the command line.
 void obstacleFromPlan(DemoOptions& o, const std::vector<std::string>& given) {
   if (o.plan.empty() || !std::filesystem::is_regular_file(o.plan)) return;
-  const core::ObstacleSpec ob = core::loadPlan(o.plan).obstacle;
+  const core::Plan plan = core::loadPlan(o.plan);
+  const bool steps = std::any_of(plan.phases.begin(), plan.phases.end(), [](const auto& ph) {
+    return ph.right_contact != ph.left_contact;
+  });
+  if (!steps) return;
+  const core::ObstacleSpec ob = plan.obstacle;
   const std::string shape = ob.shape == core::ObstacleSpec::Shape::Box ? "box" : "cylinder";
   const auto same = [](double a, double b) { return std::abs(a - b) <= 1e-9; };
   const auto metres = [](double v) {

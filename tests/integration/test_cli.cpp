@@ -2,7 +2,6 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
-#include <filesystem>
 #include <functional>
 #include <nlohmann/json.hpp>
 #include <vector>
@@ -107,20 +106,6 @@ TEST(Cli, CheckRefusesWhatItCannotCheckInFull) {
   test::writeText(dir.path() / "deep.json", std::string(60000, '[') + std::string(60000, ']'));
   expectOneLineError(run("check " + dir.file("deep.json")), 2,
                      "deep.json: JSON nested deeper than 16 levels");
-}
-
-// `demo --plan P` simulates the plan's bar: an obstacle option that contradicts the plan (a plan
-// for one bar replayed in front of another) is refused before anything starts.
-TEST(Cli, DemoRefusesAnObstacleThatIsNotThePlans) {
-  test::TempDir dir;
-  const std::string plan = dir.file("stand.json");
-  ASSERT_EQ(run("plan --stand 0.5 --out " + plan).code, 0);
-  const std::string demo = "demo --no-report --run-root " + dir.file("runs") + " --plan " + plan;
-  expectOneLineError(run(demo + " --obstacle-height 0.05"), 2,
-                     "--obstacle-height differs from the plan's obstacle");
-  expectOneLineError(run(demo + " --obstacle-shape cylinder"), 2,
-                     "--obstacle-shape differs from the plan's obstacle");
-  EXPECT_FALSE(std::filesystem::exists(dir.path() / "runs")) << "refused before a run folder";
 }
 
 /// An LCM log event header (big-endian: sync word, event number 0, time 0, channel length, data

@@ -86,6 +86,17 @@ TEST_F(DemoLcm, SmallObstacleRunWritesAConsistentVerdict) {
   }
   EXPECT_LE(fid["pelvis_deviation_max"]["value"].get<double>(), 0.010);
   EXPECT_LE(fid["settling_time"]["value"].get<double>(), 1.0);
+  // The plan steps over a 5 cm bar: replayed with another bar's options it is refused before
+  // anything starts (without them, the simulated bar is the plan's).
+  const std::string replay = "demo --no-report --run-root " + dir.file("runs2") + " --plan " +
+                             (run / "plan.json").string();
+  for (const std::string opt : {"--obstacle-height", "--obstacle-gap"}) {
+    const auto bad = test::runOverstep(replay + " " + opt + " 0.25");
+    EXPECT_EQ(bad.code, 2) << opt << "\n" << bad.err;
+    EXPECT_NE(bad.err.find(opt + " differs from the plan's obstacle"), std::string::npos)
+        << bad.err;
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "runs2")) << "refused before a run folder";
   // A second run with the same inputs reuses the cached plan: no planning.
   const auto again = test::runOverstep(smallBar() + " --allow-invalid-plan --json --timeout 60 " +
                                        "--run-root " + dir.file("runs"));
