@@ -396,67 +396,40 @@ struct OverstepProblem::Impl : ProblemModel {
     contactTorques(w);
   }
 
-  /// The passive (elastic) equations of motion at the current state: in single support the four
-  /// elastic joints' residuals (N m), in double support the sway balance about the feet's line.
-  Eigen::VectorXd passiveResidual(Workspace& w, int phase) const {
+  /// In single support, at the current state: the four elastic joints' equations of motion
+  /// (residuals, N m) and the stance sole's CoP (m, sole frame), what the passive polish
+  /// corrects and what it must leave in place.
+  Eigen::VectorXd residualAndCop(Workspace& w, int phase) const {
     const State& st = w.st;
-    const auto& ph = phaseTable()[static_cast<std::size_t>(phase)];
-    if (ph.right_contact && ph.left_contact) return Eigen::VectorXd::Constant(1, st.ds_balance);
-    const int stance = ph.right_contact ? kRight : kLeft;
+    const int stance = inContact(phase, kRight) ? kRight : kLeft;
     const Eigen::MatrixXd& J = st.J_sole[stance];
-    Eigen::VectorXd r(4);
+    Eigen::VectorXd r(6);
     for (int f = 0; f < 2; ++f)
       for (int e = 0; e < 2; ++e) {
         const int c = flex_coord[static_cast<std::size_t>(2 * f + e)];
         r(2 * f + e) = st.tau(c) - (f == stance ? J.col(c).dot(st.wrench[f]) : 0.0);
       }
-    return r;
-  }
-
-  /// In single support: the four elastic joints' residuals (N m) and the stance sole's CoP (m,
-  /// sole frame), what the passive polish corrects and what it must leave in place.
-  Eigen::VectorXd residualAndCop(Workspace& w, int phase) const {
-    const int stance = inContact(phase, kRight) ? kRight : kLeft;
     Eigen::Vector3d mo, fo;
-    soleWrench(w.st, stance, mo, fo);
-    Eigen::VectorXd r(6);
-    r << passiveResidual(w, phase), -mo.y() / fo.z(), mo.x() / fo.z();
+    soleWrench(st, stance, mo, fo);
+    r(4) = -mo.y() / fo.z();
+    r(5) = mo.x() / fo.z();
     return r;
   }
 
-  /// Directions (columns, tangent space) in which the passive coordinates can move with every
-  /// actuated joint held and the stance sole(s) fixed: single support, each elastic joint with the
-  /// base following the stance foot; double support, the whole body rotating about the line
-  /// through both bushing centres (both bushings deflect along it, the joints stay).
+  /// In single support, the directions (columns, tangent space) in which the passive coordinates
+  /// can move with every actuated joint held and the stance sole fixed: each elastic joint with
+  /// the base following the stance foot.
   Eigen::MatrixXd passiveDirections(Workspace& w, int phase, const Eigen::VectorXd& q) const {
     robots::WholeBodyModel& m = *w.model;
-    const auto& ph = phaseTable()[static_cast<std::size_t>(phase)];
     const int anchor = anchor_of[phase];
-    const bool ds = ph.right_contact && ph.left_contact;
     m.setPositions(q);
     const Eigen::Isometry3d X = m.framePose(sole_frame[anchor]);
     const double eps = 1e-6;
-    const int cols = ds ? 1 : 4;
-    Eigen::MatrixXd U(m.dofs(), cols);
-    Eigen::Vector4d dir[4];
-    if (ds) {
-      const Eigen::Vector3d line = (m.framePose(sole_frame[kLeft]).translation() -
-                                    m.framePose(sole_frame[kRight]).translation())
-                                       .normalized();
-      Eigen::Vector4d d4;
-      for (int f = 0; f < 2; ++f) {
-        const Eigen::Matrix3d R = m.framePose(sole_frame[f]).linear();
-        d4(2 * f) = R.col(0).dot(line);      // roll: about the foot's x
-        d4(2 * f + 1) = R.col(1).dot(line);  // pitch: about the foot's y
-      }
-      dir[0] = d4;
-    } else {
-      for (int i = 0; i < 4; ++i) dir[i] = Eigen::Vector4d::Unit(i);
-    }
+    Eigen::MatrixXd U(m.dofs(), 4);
     Eigen::VectorXd v0 = Eigen::VectorXd::Zero(m.dofs()), a0 = v0;
-    for (int c = 0; c < cols; ++c) {
+    for (int c = 0; c < 4; ++c) {
       Eigen::VectorXd qp = q;
-      for (int i = 0; i < 4; ++i) qp(flex_coord[static_cast<std::size_t>(i)]) += eps * dir[c](i);
+      qp(flex_coord[static_cast<std::size_t>(c)]) += eps;
       v0.setZero();
       a0.setZero();
       m.anchorBase(sole_frame[anchor], X, qp, v0, a0);
