@@ -196,9 +196,9 @@ void registerDemoCommand(CLI::App& app, cli::Registry& registry) {
                   "Wall-time limit of the planner, s (default: its configuration's)");
   sub->add_flag("--replan", o->replan, "Ignore the plan cache");
   sub->add_option("--plan", o->plan,
-                  "Replay this plan file instead of planning (its validity: overstep check; the "
-                  "simulated bar is the plan's; with --identify: the run before, and the re-plan "
-                  "starts from it)");
+                  "Replay this plan file instead of planning (its validity: overstep check; a "
+                  "plan that steps over its bar is simulated in front of that bar; with "
+                  "--identify: the run before, and the re-plan starts from it)");
   sub->add_flag("--no-report", o->no_report, "Skip the figures (overstep report) at the end");
   sub->add_flag("--allow-invalid-plan", o->allow_invalid,
                 "Replay the planner's best attempt when no plan passes the check");
