@@ -308,11 +308,12 @@ def yaml():
             ("damping_time_constant", "1.0", "s, return of the foot rotation to the reference"),
             ("max_foot_rotation", "0.17", "rad (10 deg, Kajita 2010)"),
             ("max_foot_rotation_rate", "0.5", "rad/s"),
-            # Off on this model: its only compliance between the feet in double support is the
-            # ankle bushings' roll and pitch, so a foot height difference is fought by the rigid
-            # leg chain; in the simulator any gain (1e-4, and hrpsys's 5.7e-6) rocked the
-            # standing robot from one foot to the other within 0.5 s (docs/runtime.md).
-            ("force_difference_gain", "0.0", "m/(N s), off (see gen_hrp2.py)"),
+            # With the bushings' vertical give (bushing_vertical, below) a foot height difference
+            # of 1 mm moves ~240 N between the feet, and the loop's rate is K k = 24 1/s at 1e-4.
+            # Off, the robot rocked from foot to foot on the springs (~1.7 Hz; CoP p95 33-55 mm,
+            # pelvis 10-17 mrad); 2e-5 / 5e-5 / 1e-4 / 2e-4 gave 1-2 / 0-1 / 0-1 / 0-1 losses
+            # per run (docs/runtime.md). (On the rigid foot any gain rocked the robot.)
+            ("force_difference_gain", "1.0e-4", "m/(N s), foot force difference control"),
             ("max_foot_height", "0.02", "m"),
             # Landing: with the whole-body ZMP reference the soles meet the ground within
             # 0.2 mm of the plan's (6-66 ms late); a fast search (F_d / 4000 N s/m, ~18 mm/s)
@@ -331,6 +332,15 @@ def yaml():
             ("max_com_error", "0.10", "m, larger -> fault and hold"),
             ("max_torso_tilt", "0.5", "rad, larger -> fault and hold")):
         y.append("  %-24s # %s" % ("%s: %s" % (key, val), comment))
+    # Last, and its comments after its key: the section is left out of the robot's hash (the
+    # planner's model does not have it), and so is every line up to the next top-level key.
+    y.append("")
+    y.append("bushing_vertical: {stiffness: 239018, damping: 1000}")
+    y.append("# The ankle bushings' vertical give along the sole normal (N/m, N s/m): the LAAS")
+    y.append("# identification of the bushing's 6-D stiffness gives z 239018 N/m [open: sot-torque-control];")
+    y.append("# estimators use 40000-150000 [open]. Damping [est]: about a tenth of critical with the robot")
+    y.append("# on one foot (2 sqrt(k m) ~ 7500 N s/m). The seed's model and the planner's leave it out;")
+    y.append("# the simulator has it, and the stabilizer lowers each foot by its planned load / stiffness.")
     return "\n".join(y) + "\n"
 
 def main():

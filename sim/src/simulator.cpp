@@ -9,6 +9,7 @@
 #include <dart/dynamics/BodyNode.hpp>
 #include <dart/dynamics/BoxShape.hpp>
 #include <dart/dynamics/Joint.hpp>
+#include <dart/dynamics/PrismaticJoint.hpp>
 #include <dart/dynamics/RevoluteJoint.hpp>
 #include <dart/dynamics/ShapeNode.hpp>
 #include <dart/dynamics/SimpleFrame.hpp>
@@ -63,10 +64,13 @@ struct Simulator::Impl {
   SimOptions opt;
   dart::simulation::WorldPtr world;
   dd::SkeletonPtr robot;
-  std::vector<dd::Joint*> actuated;     // model order
-  std::vector<dd::Joint*> elastic;      // model order
-  std::vector<double> bushing_inertia;  // kg m^2, bodies below each bushing about its axis
-  std::array<dd::BodyNode*, 2> foot{};
+  std::vector<dd::Joint*> actuated;      // model order
+  std::vector<dd::Joint*> elastic;       // model order
+  std::vector<double> bushing_inertia;   // kg m^2, bodies below each bushing about its axis
+  std::array<dd::BodyNode*, 2> foot{};   // the foot links (capsules, sensors)
+  std::array<dd::BodyNode*, 2> sole{};   // what touches the ground: the foot link, or the body on
+                                         // its vertical bushing spring (sole_stiffness > 0)
+  std::array<dd::Joint*, 2> vertical{};  // that spring's prismatic joint (nullptr: rigid)
   std::array<core::FootDescription, 2> foot_desc{};
   std::array<Eigen::Isometry3d, 2> sole_in_foot{
       {Eigen::Isometry3d::Identity(), Eigen::Isometry3d::Identity()}};
@@ -102,7 +106,55 @@ struct Simulator::Impl {
   std::array<Eigen::Matrix<double, 6, Eigen::Dynamic>, 2> ft_hist;
 
   explicit Impl(const robots::WholeBodyModel& m) : model(m) {}
+  void addVerticalBushings();
 };
+
+void Simulator::Impl::addVerticalBushings() {
+  const std::size_t n_model = robot->getNumDofs();
+  for (std::size_t f = 0; f < 2; ++f) {
+    dd::BodyNode* link = foot[f];
+    // The sole slides along the sole frame's normal, from the foot link's origin.
+    dd::PrismaticJoint::Properties jp;
+    jp.mName = link->getName() + "_VERTICAL";
+    jp.mAxis = sole_in_foot[f].linear().col(2);
+    auto pair = link->createChildJointAndBodyNodePair<dd::PrismaticJoint>(jp);
+    dd::PrismaticJoint* jt = pair.first;
+    dd::BodyNode* body = pair.second;
+    body->setName(link->getName() + "_SOLE");
+    // All but 2 % of the foot's mass is below the bushing; both parts keep the foot's centre of
+    // mass, so the bodies below each rotational bushing keep their inertia about its axis.
+    const dd::Inertia I = link->getInertia();
+    const double keep = 0.02;
+    body->setInertia(
+        dd::Inertia((1.0 - keep) * I.getMass(), I.getLocalCOM(), (1.0 - keep) * I.getMoment()));
+    link->setInertia(dd::Inertia(keep * I.getMass(), I.getLocalCOM(), keep * I.getMoment()));
+    std::vector<dd::ShapeNode*> moved;
+    for (std::size_t k = 0; k < link->getNumShapeNodes(); ++k)
+      if (link->getShapeNode(k)->has<dd::CollisionAspect>()) moved.push_back(link->getShapeNode(k));
+    for (dd::ShapeNode* sn : moved) {
+      auto* copy =
+          body->createShapeNodeWith<dd::CollisionAspect, dd::DynamicsAspect>(sn->getShape());
+      copy->setRelativeTransform(sn->getRelativeTransform());
+      copy->getDynamicsAspect()->setFrictionCoeff(opt.ground_friction);
+      sn->remove();
+    }
+    // The spring acts explicitly: stable while k dt^2 / m stays below 1 on the sole's mass.
+    if (model.description().bushing_vertical_stiffness * opt.dt * opt.dt > body->getMass())
+      throw InputError("sim: bushing_vertical stiffness is unstable at this time step on a " +
+                       std::to_string(body->getMass()) + " kg foot (k dt^2 / m > 1)");
+    jt->setActuatorType(dd::Joint::FORCE);
+    jt->setForceLowerLimit(0, -std::numeric_limits<double>::infinity());
+    jt->setForceUpperLimit(0, std::numeric_limits<double>::infinity());
+    sole[f] = body;
+    vertical[f] = jt;
+    below_sensor[f].push_back(body);
+  }
+  // The model's coordinates keep their indices (the two new ones come last): framePose() and
+  // the model-order accessors read the robot through them.
+  for (std::size_t i = 0; i < n_model; ++i)
+    if (robot->getDof(i)->getName() != model.skeleton()->getDof(i)->getName())
+      throw std::logic_error("sim: the vertical bushings reordered the robot's coordinates");
+}
 
 Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& truth,
                      const SimOptions& options)
@@ -240,6 +292,10 @@ Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& tr
         sn->getDynamicsAspect()->setFrictionCoeff(options.ground_friction);
     }
   }
+  s.sole = s.foot;
+  // The bushings' vertical give (the robot description's bushing_vertical; the planner's model
+  // leaves it out): each foot's mass and collision box on a vertical spring below its link.
+  if (d.bushing_vertical_stiffness > 0.0) s.addVerticalBushings();
   // Capsules for the geometric checks; the obstacle, if any, as a box the feet can stand on.
   for (const auto& c : d.capsules) {
     const dd::BodyNode* bn = s.robot->getBodyNode(c.link);
@@ -287,8 +343,8 @@ Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& tr
   if (s.has_obstacle) {
     for (int f = 0; f < 2; ++f) {
       const auto fi = static_cast<std::size_t>(f);
-      for (std::size_t k = 0; k < s.foot[fi]->getNumShapeNodes(); ++k) {
-        const dd::ShapeNode* sn = s.foot[fi]->getShapeNode(k);
+      for (std::size_t k = 0; k < s.sole[fi]->getNumShapeNodes(); ++k) {
+        const dd::ShapeNode* sn = s.sole[fi]->getShapeNode(k);
         const auto box_shape = std::dynamic_pointer_cast<const dd::BoxShape>(sn->getShape());
         if (!sn->has<dd::CollisionAspect>() || !box_shape) continue;
         s.foot_box[fi].X = sn->getRelativeTransform();
@@ -389,7 +445,7 @@ void Simulator::step() {
     if (!contacts_.foot_contact[fi] ||
         w(5) < 0.1 * s.robot->getMass() * s.model.description().gravity)
       continue;
-    const Eigen::Isometry3d X = s.foot[fi]->getWorldTransform() * s.sole_in_foot[fi];
+    const Eigen::Isometry3d X = s.sole[fi]->getWorldTransform() * s.sole_in_foot[fi];
     const Eigen::Vector3d m =
         X.linear().transpose() * (w.head<3>() - X.translation().cross(w.tail<3>()));
     const double fz = (X.linear().transpose() * w.tail<3>()).z();
@@ -405,12 +461,23 @@ void Simulator::step() {
     s.elastic[e]->setCommand(0, -s.truth.elastic_stiffness[e] * s.elastic[e]->getPosition(0) -
                                     d_use * s.elastic[e]->getVelocity(0));
   }
+  for (std::size_t f = 0; f < 2; ++f) {
+    dd::Joint* jt = s.vertical[f];
+    if (!jt) continue;
+    // The same split as the rotational bushings': explicit on a held foot, implicit on the
+    // sole's own mass in the air (c dt / m = 1 there).
+    const auto& d = s.model.description();
+    const double c = d.bushing_vertical_damping, m = s.sole[f]->getMass();
+    const double c_use = held[f] ? c : c / (1.0 + dt * c / m);
+    jt->setCommand(0,
+                   -d.bushing_vertical_stiffness * jt->getPosition(0) - c_use * jt->getVelocity(0));
+  }
   s.world->step();
 
   // Ground reaction on each foot from its constraint impulse (only contacts act on the feet).
   contacts_ = ContactInfo{};
   for (int f = 0; f < 2; ++f) {
-    dd::BodyNode* bn = s.foot[static_cast<std::size_t>(f)];
+    dd::BodyNode* bn = s.sole[static_cast<std::size_t>(f)];
     const Eigen::Vector6d imp = bn->getConstraintImpulse() / dt;  // [angular; linear], body frame
     const Eigen::Isometry3d X = bn->getWorldTransform();
     core::Vector6d w_body;
@@ -462,7 +529,8 @@ Eigen::Isometry3d Simulator::basePose() const { return impl_->base->getWorldTran
 
 Eigen::Isometry3d Simulator::framePose(const std::string& frame) const {
   Impl& s = *impl_;
-  s.model.skeleton()->setPositions(s.robot->getPositions());
+  s.model.skeleton()->setPositions(
+      s.robot->getPositions().head(static_cast<Eigen::Index>(s.model.skeleton()->getNumDofs())));
   return s.model.framePose(s.model.frameIndex(frame));
 }
 
@@ -500,7 +568,7 @@ CollisionStatus Simulator::collisions() const {
       const auto fi = static_cast<std::size_t>(f);
       if (!s.foot_is_box[fi]) continue;
       Obb foot = s.foot_box[fi];
-      foot.X = s.foot[fi]->getWorldTransform() * foot.X;
+      foot.X = s.sole[fi]->getWorldTransform() * foot.X;
       if (boxesNear(foot, s.bar_box, 0.0) && c.obstacle_distance > 0.0) {
         c.obstacle_distance = 0.0;
         c.obstacle_link = s.foot[fi]->getName();

@@ -92,6 +92,9 @@ TEST(RobotDescription, HashIgnoresWhatDoesNotShapeAPlan) {
   EXPECT_EQ(hashWith("frequency: 0.31", "frequency: 0.32"), base);
   EXPECT_EQ(hashWith("  head: [HEAD_JOINT0, HEAD_JOINT1]", "  head: [HEAD_JOINT0]"), base);
   EXPECT_NE(hashWith("  - [LARM_LINK6, LLEG_LINK2]\n", ""), base);
+  // Nor the bushings' vertical give, which the planner's model leaves out.
+  EXPECT_EQ(hashWith("{stiffness: 239018, damping: 1000}", "{stiffness: 150000, damping: 500}"),
+            base);
 }
 
 // Robot specifics the code once named as literals come from the robot file: the self-collision
@@ -146,6 +149,20 @@ TEST(RobotDescription, ScalarListEntriesAreBadInputNotACrash) {
 TEST(RobotDescription, RejectsNegativeStiffness) {
   expectYamlError("stiffness: 707", "stiffness: -707",
                   "elastic_joints[0].stiffness: expected >= 0");
+}
+
+TEST(RobotDescription, RejectsBadBushingVerticalGive) {
+  const std::string row = "bushing_vertical: {stiffness: 239018, damping: 1000}";
+  expectYamlError(row, "bushing_vertical: 3", "bushing_vertical: expected {stiffness, damping}");
+  expectYamlError(row, "bushing_vertical: {stiffness: 50, damping: 1000}",
+                  "bushing_vertical.stiffness: expected 0 (rigid) or 1e3 to 1e6 N/m, got 50");
+  expectYamlError(row, "bushing_vertical: {stiffness: 5e6, damping: 1000}",
+                  "bushing_vertical.stiffness: expected 0 (rigid) or 1e3 to 1e6 N/m");
+  expectYamlError(row, "bushing_vertical: {stiffness: 239018, damping: -1}",
+                  "bushing_vertical.damping: expected >= 0");
+  expectYamlError(row, "bushing_vertical: {stiffness: 239018, damping: 2e4}",
+                  "bushing_vertical.damping: expected 0 to 1e4 N s/m");
+  expectYamlError(row, "bushing_vertical: {stiffness: 239018}", "damping");
 }
 
 TEST(RobotDescription, RejectsNegativeDamping) {

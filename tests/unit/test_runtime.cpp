@@ -6,6 +6,7 @@
 #include <functional>
 
 #include "overstep/core/error.hpp"
+#include "overstep/robots/leg.hpp"
 #include "overstep/robots/whole_body_model.hpp"
 #include "overstep/runtime/loop_stats.hpp"
 #include "overstep/runtime/plan_track.hpp"
@@ -224,8 +225,18 @@ TEST_F(RuntimeTest, LifecycleRunsThePlanToTheEnd) {
   ASSERT_EQ(r.state(), State::Finished) << runtime::toString(r.fault());
   EXPECT_GE(moving, 19);  // 0.1 s at 200 Hz
   EXPECT_NEAR(r.output().plan_time, track.duration(), 1e-9);
-  // A perfect robot needs no correction: the command is the plan.
-  EXPECT_LT((r.output().command.q_ref - track.makeSample().q).norm(), 1e-3);
+  // A perfect robot needs no feedback: the command is the plan with the model's feed-forward (the
+  // legs lowered by the bushings' vertical compression under the planned loads) and nothing else.
+  const auto& o = r.output();
+  EXPECT_LT((o.command.q_ref - o.q_reference).norm(), 1e-3);
+  EXPECT_LT(o.correction_norm, 1e-3);
+  const Eigen::VectorXd ff = o.q_reference - track.makeSample().q;
+  EXPECT_GT(ff.norm(), 1e-3) << "the compression offsets move the legs";
+  EXPECT_LT(ff.norm(), 0.05);
+  Eigen::VectorXd off_legs = ff;
+  for (const auto& leg : robots::legChains(*model_))
+    for (int j : leg.actuated) off_legs(j) = 0.0;
+  EXPECT_EQ(off_legs.cwiseAbs().maxCoeff(), 0.0) << "only the legs";
 }
 
 // With the robot's clock (lcm, lockstep) the plan advances by the states' time stamps: the

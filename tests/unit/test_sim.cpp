@@ -50,6 +50,17 @@ TEST(Sim, StandsTenSecondsInHalfSittingWithStaticsHolding) {
     const double k = model().description().elastic[static_cast<std::size_t>(e)].stiffness;
     EXPECT_NEAR(q(e), tau(e) / k, 2e-4 + 0.02 * std::abs(tau(e) / k)) << "bushing " << e;
   }
+  // Each sole gives along its normal by its load over the bushing's vertical stiffness: the foot
+  // link (whose sole frame the model places) sits that far below the ground (the contact's own
+  // penetration is ~0.01 mm).
+  const double kz = model().description().bushing_vertical_stiffness;
+  ASSERT_GT(kz, 0.0);
+  for (int f = 0; f < 2; ++f) {
+    const double fz = sim.contacts().foot_wrench[static_cast<std::size_t>(f)](5);
+    const double link_z = sim.framePose(f == 0 ? "right_sole" : "left_sole").translation().z();
+    EXPECT_GT(fz / kz, 5e-4) << "foot " << f << ": a millimetre, not nothing";
+    EXPECT_NEAR(-link_z, fz / kz, 5e-5 + 0.02 * fz / kz) << "foot " << f;
+  }
   // The posture is held: joints track their references.
   EXPECT_LT((st.q - st0.q).cwiseAbs().maxCoeff(), 1e-3);
   EXPECT_TRUE(st.has_ground_truth);

@@ -137,6 +137,11 @@ struct RobotDescription {
   double gravity = 9.81;  ///< m/s^2, along -z
   std::vector<ActuatedJoint> actuated;
   std::vector<ElasticJoint> elastic;
+  /// The elastic bushings' vertical give (along the sole normal), per foot: N/m and N s/m, 0 for a
+  /// rigid foot. The planner's model leaves it out (as the seed does); the simulator has it and
+  /// the stabilizer compensates the planned loads' compression (docs/runtime.md).
+  double bushing_vertical_stiffness = 0.0;
+  double bushing_vertical_damping = 0.0;
   std::vector<FootDescription> feet;  ///< right first, then left (may be empty)
   std::vector<FrameDescription> frames;
   std::vector<CapsuleDescription> capsules;
@@ -147,9 +152,10 @@ struct RobotDescription {
   std::vector<ExcitationJoint> excitation;  ///< the identification excitation's joints
   Eigen::VectorXd half_sitting;             ///< actuated joint angles, rad (size = actuated.size())
   double acceleration_limit = 30.0;         ///< rad/s^2, for planners
-  /// FNV-1a of the URDF and of the YAML without its `stabilizer:`, `joint_groups:` and
-  /// `excitation:` sections (what shapes a plan: the runtime's gains and the identification's
-  /// inputs do not, so a plan stays valid while they are tuned).
+  /// FNV-1a of the URDF and of the YAML without its `stabilizer:`, `joint_groups:`,
+  /// `excitation:` and `bushing_vertical:` sections (what shapes a plan: the runtime's gains, the
+  /// identification's inputs and what the planner's model leaves out do not, so a plan stays
+  /// valid while they are tuned).
   std::uint64_t content_hash = 0;
   /// Overlays (a YAML with `base: FILE`): the base description's file, and the effects added.
   std::string base_yaml;
