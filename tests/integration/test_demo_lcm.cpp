@@ -66,23 +66,21 @@ TEST_F(DemoLcm, SmallObstacleRunWritesAConsistentVerdict) {
     EXPECT_GT(s["right_heel_x"].get<double>(), s["obstacle_x"][1].get<double>());
     EXPECT_GT(s["left_heel_x"].get<double>(), s["obstacle_x"][1].get<double>());
   }
-  // Execution fidelity (issue 19), from the recorded sensor readings: with the whole-body ZMP
-  // reference and the landing control the stance CoPs stay on the plan's, touchdown loads within
-  // 1.3 x the weight, no chatter, the pelvis within the issue's 10 mrad of the plan, the robot
-  // still at the end (measured on the plan of 29d483d, seeds 1-3, right / left: losses 2 / 1,
-  // loads <= 1.16, CoP p95 <= 8.7 mm, max 18-37 / 8-40 mm, pelvis 5.5 mrad, static at once; the
-  // maxima are single ticks of the right foot's touchdown bounce, the issue's 30 mm is not met;
-  // with the table-cart reference and no landing control, on an earlier plan: losses 6 / 5, CoP
-  // p95 12.5 mm, max 65 mm, 0.9 s to settle; docs/runtime.md).
+  // Execution fidelity (issue 19), from the recorded sensor readings, against the issue's targets
+  // (losses: at most one). With the bushings' vertical give in the simulator and the stabilizer's
+  // compression offsets, measured on this plan (session 42, seeds 1-3, right / left): losses
+  // 0-1 / 0 (one on seed 3, 12 ms early), loads <= 0.57 / 0.92, CoP p95 9.4-9.7 / 6.6-6.8 mm, max
+  // 17-19 / 11-13 mm, pelvis 5.3 mrad, static at once. On rigid feet: losses 2 / 1, CoP maxima up
+  // to 40 mm, the right touchdown's bounce (docs/runtime.md).
   ASSERT_TRUE(v.contains("fidelity")) << v.dump();
   const json& fid = v["fidelity"];
   for (const char* side : {"right", "left"}) {
     const json& f = fid["feet"][side];
-    EXPECT_LE(f["contact_losses"]["value"].get<double>(), 2.0) << side;
+    EXPECT_LE(f["contact_losses"]["value"].get<double>(), 1.0) << side;
     EXPECT_LE(f["peak_touchdown_load"]["value"].get<double>(), 1.3) << side;
     EXPECT_LE(f["chatter_rms"]["value"].get<double>(), 0.3) << side;
-    EXPECT_LE(f["cop_deviation_p95"]["value"].get<double>(), 0.010) << side;
-    EXPECT_LE(f["cop_deviation_max"]["value"].get<double>(), 0.050) << side;
+    EXPECT_LE(f["cop_deviation_p95"]["value"].get<double>(), 0.015) << side;
+    EXPECT_LE(f["cop_deviation_max"]["value"].get<double>(), 0.030) << side;
   }
   EXPECT_LE(fid["pelvis_deviation_max"]["value"].get<double>(), 0.010);
   EXPECT_LE(fid["settling_time"]["value"].get<double>(), 1.0);
