@@ -74,7 +74,7 @@ struct RunMeasures {
     if (o.state == runtime::State::Running && run_start < 0.0) run_start = robot_time;
     if (o.state == runtime::State::Finished && run_end < 0.0) run_end = robot_time;
     if (!executing) return;
-    track_sq += (st.q - o.q_reference).squaredNorm() / static_cast<double>(st.q.size());
+    track_sq += (st.q - o.sample.q).squaredNorm() / static_cast<double>(st.q.size());
     ++track_n;
     effort_sq += o.correction_norm * o.correction_norm;
     ++effort_n;

@@ -184,6 +184,7 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
   }
   if (N > 1) zmp_vel_.col(0) = zmp_vel_.col(1);
   if (N > 1) zmp_wb_vel_.col(0) = zmp_wb_vel_.col(1);
+  compensateVerticalGive(d.bushing_vertical_stiffness);
   model_ = std::make_unique<robots::WholeBodyModel>(model);
   q0_ = plan.q.col(0);
   sole_frame_[0] = sole[0];
@@ -194,12 +195,38 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
 
 PlanTrack::~PlanTrack() = default;
 
+void PlanTrack::compensateVerticalGive(double stiffness) {
+  const int N = samples();
+  compression_.setZero(2, N);
+  if (!(stiffness > 0.0)) return;
+  // The plan's model has no vertical give in the bushings: each leg in contact is lengthened by
+  // its planned normal force / stiffness along the sole normal (through the leg Jacobian's
+  // inverse: a few mrad), so the robot, whose soles do give, stands where the plan puts it.
+  // Velocities get the offsets' rate (backward differences over the samples).
+  Eigen::MatrixXd dq = Eigen::MatrixXd::Zero(joints_, N);
+  for (int k = 0; k < N; ++k)
+    for (int f = 0; f < 2; ++f) {
+      compression_(f, k) = std::max(0.0, wrench_[f](5, k)) / stiffness;
+      core::Vector6d dx = core::Vector6d::Zero();
+      dx(5) = -compression_(f, k);
+      const Eigen::Matrix<double, 6, 1> dql = leg_inv_[f][std::size_t(k)] * dx;
+      for (int i = 0; i < 6; ++i) dq(leg_[std::size_t(f)][std::size_t(i)], k) += dql(i);
+    }
+  q_ += dq;
+  for (int k = 1; k < N; ++k) {
+    int a = k - 1;  // the sample before, past a switch's second sample at the same instant
+    while (a > 0 && t_(k) - t_(a) <= 1e-9) --a;
+    const double dt = t_(k) - t_(a);
+    if (dt > 1e-9) qd_.col(k) += (dq.col(k) - dq.col(a)) / dt;
+  }
+}
+
 bool PlanTrack::planMove(const Eigen::VectorXd& q_now, int samples, Eigen::MatrixXd& out) const {
   robots::WholeBodyModel& m = *model_;
   const int nA = joints_;
   if (q_now.size() != nA || samples < 2) return false;
   out.resize(nA, samples);
-  const Eigen::VectorXd q_to = q0_.segment(m.actuatedCoordinate(0), nA);
+  const Eigen::VectorXd q_to = q_.col(0);  // with the compression offsets
   const bool both = contact_[0][0] && contact_[0][1];
   // Feet where the plan's first sample has them; the base pose now from the measured joints
   // with the anchor (left if loaded) sole there.
@@ -227,6 +254,8 @@ bool PlanTrack::planMove(const Eigen::VectorXd& q_now, int samples, Eigen::Matri
   if (both &&
       (ankle_from[1 - anchor].translation() - ankle_to[1 - anchor].translation()).norm() > 2e-3)
     return false;
+  // The move ends with each loaded leg lengthened by its sole's compression (as q_to is).
+  for (int f = 0; f < 2; ++f) ankle_to[f].translation().z() -= compression_(f, 0);
   for (int k = 0; k < samples; ++k) {
     const double u = static_cast<double>(k) / (samples - 1);
     const double b = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);

@@ -61,7 +61,6 @@ Replay::Replay(const PlanTrack& track, const stabilizer::Params& params,
   const int n = track.joints();
   out_.command.resize(n);
   out_.sample = track.makeSample();
-  out_.q_reference.setZero(n);
   last_state_.resize(n);
   move_from_.setZero(n);
   q_hold_.setZero(n);
@@ -249,14 +248,9 @@ void Replay::commandFromReference(bool with_stabilizer, double dt) {
       c.qd_ref = qd_zero_;
       break;
   }
-  out_.q_reference = out_.state == State::Hold ? q_hold_ : s.q;
   if (with_stabilizer) {
     // In Hold the corrections ramp out around the frozen posture, without the plan's motion.
     track_.applyCorrections(s, out_.stab, c.q_ref);
-    // The compression offsets alone: the model's feed-forward, not feedback.
-    stabilizer::Output ff;
-    ff.foot_height = {-out_.stab.compression[0], -out_.stab.compression[1]};
-    track_.applyCorrections(s, ff, out_.q_reference);
   }
   out_.clamped = false;
   double norm2 = 0.0;
@@ -269,7 +263,7 @@ void Replay::commandFromReference(bool with_stabilizer, double dt) {
     if (q != c.q_ref(j)) out_.clamped = true;
     c.q_ref(j) = q;
     c.qd_ref(j) = std::clamp(c.qd_ref(j), -track_.velocityLimit()(j), track_.velocityLimit()(j));
-    const double e = with_stabilizer ? q - out_.q_reference(j) : 0.0;
+    const double e = with_stabilizer ? q - (out_.state == State::Hold ? q_hold_(j) : s.q(j)) : 0.0;
     norm2 += e * e;
   }
   out_.correction_norm = std::sqrt(norm2);

@@ -76,10 +76,6 @@ std::string validate(const Params& p) {
   if (!(p.mass > 0.0 && p.mass < 1000.0))
     return "stabilizer mass: expected 0 to 1000 kg (set it from the robot model), got " +
            fmt(p.mass);
-  if (!(p.bushing_vertical_stiffness == 0.0 ||
-        (p.bushing_vertical_stiffness >= 1e3 && p.bushing_vertical_stiffness <= 1e6)))
-    return "stabilizer bushing_vertical_stiffness: expected 0 (rigid) or 1e3 to 1e6 N/m, got " +
-           fmt(p.bushing_vertical_stiffness);
   for (const auto& s : p.sole)
     if (!(s.x_min < s.x_max && s.y_min < s.y_max && s.x_min <= 0.0 && s.x_max >= 0.0 &&
           s.y_min <= 0.0 && s.y_max >= 0.0 && s.x_min > -1.0 && s.x_max < 1.0 && s.y_min > -1.0 &&
@@ -92,7 +88,6 @@ Params loadParams(const std::string& robot_yaml) {
   const core::RobotDescription d = core::loadRobotDescription(robot_yaml);
   Params p;
   p.gravity = d.gravity;
-  p.bushing_vertical_stiffness = d.bushing_vertical_stiffness;
   for (int f = 0; f < 2; ++f) {
     const core::FootDescription* foot = d.foot(f == 0 ? "right" : "left");
     if (!foot)

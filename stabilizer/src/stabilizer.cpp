@@ -52,7 +52,6 @@ void scaleInto(const Output& raw, double s, Output& out) {
     out.foot_rotation[f] = s * raw.foot_rotation[f];
     out.foot_height[f] = s * raw.foot_height[f];
     out.landing_height[f] = s * raw.landing_height[f];
-    out.compression[f] = s * raw.compression[f];
   }
   out.body_attitude = s * raw.body_attitude;
 }
@@ -305,8 +304,7 @@ void Stabilizer::runFeedback(const Measurement& m, double dt, Output& o) {
 
   // 4. Foot force difference (double support): z = height of the left foot minus the right one
   // (the landing offsets, below, are kept apart).
-  double z = (o.foot_height[1] - o.landing_height[1] + o.compression[1]) -
-             (o.foot_height[0] - o.landing_height[0] + o.compression[0]);
+  double z = (o.foot_height[1] - o.landing_height[1]) - (o.foot_height[0] - o.landing_height[0]);
   double zrate = -z / p.force_difference_time_constant;
   if (contact[0] && contact[1] && fz[0] > p.contact_force && fz[1] > p.contact_force) {
     const double dF = fz[1] - fz[0];
@@ -315,12 +313,7 @@ void Stabilizer::runFeedback(const Measurement& m, double dt, Output& o) {
   }
   z = integrateClamped(z, zrate, dt, 0.0, 2.0 * p.max_foot_height, sat, 0, kFootHeight);
   landing(fz, dt, o);
-  for (std::size_t f = 0; f < 2; ++f)
-    o.compression[f] = p.bushing_vertical_stiffness > 0.0
-                           ? std::max(0.0, r.foot[f].wrench(5)) / p.bushing_vertical_stiffness
-                           : 0.0;
-  o.foot_height = {-0.5 * z + o.landing_height[0] - o.compression[0],
-                   0.5 * z + o.landing_height[1] - o.compression[1]};
+  o.foot_height = {-0.5 * z + o.landing_height[0], 0.5 * z + o.landing_height[1]};
 
   // 5. Body posture from the IMU.
   const Eigen::Vector2d att_err = rollPitch(r.torso) - rollPitch(m.torso);

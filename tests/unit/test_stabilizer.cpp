@@ -563,63 +563,6 @@ TEST(StabilizerLanding, TheOffsetFollowsTheLaw) {
   EXPECT_EQ(out.landing_height[0], 0.0);
 }
 
-// Issue 19: the bushings' vertical give. Each foot is commanded lower by its planned normal force
-// / the stiffness, from the reference alone: a swinging foot not at all, the offsets exact, and
-// the force difference loop (whose state is the height difference) neither integrates them nor
-// is disturbed by them while the measured split is the planned one.
-TEST(StabilizerCompression, EachFootIsLoweredByItsPlannedLoadOverTheStiffness) {
-  const double k = 2.0e5, mg = kMass * kG;
-  st::Params p = overstep::test::plantParams();
-  p.bushing_vertical_stiffness = k;
-  p.force_difference_gain = 1e-4;
-  const auto feet = feetAt(0.1);
-  // 30 % of the weight on the right sole (y = -0.1), 70 % on the left: the ZMP at y = 0.04.
-  const Eigen::Vector2d zmp(0.0, 0.04);
-  st::Reference ref = overstep::test::staticReference(zmp, feet);
-  ref.zmp_wholebody = zmp;
-  ref.foot[0].wrench(5) = 0.3 * mg;
-  ref.foot[1].wrench(5) = 0.7 * mg;
-  st::Stabilizer s(p);
-  bringOn(s, ref);
-  st::Measurement m =
-      overstep::test::measurementWithZmp(ref.com, Eigen::Vector3d::Zero(), zmp, feet, 0);
-  m.foot_wrench[0].setZero();
-  m.foot_wrench[0](5) = 0.3 * mg;
-  m.foot_wrench[1].setZero();
-  m.foot_wrench[1](5) = 0.7 * mg;
-  st::Output out;
-  auto heightDifference = [&out] {
-    return (out.foot_height[1] + out.compression[1]) - (out.foot_height[0] + out.compression[0]);
-  };
-  for (int i = 0; i < 200; ++i) {
-    s.step(m, kDt, out);
-    for (std::size_t f = 0; f < 2; ++f)
-      ASSERT_NEAR(out.compression[f], ref.foot[f].wrench(5) / k, 1e-12) << "foot " << f;
-    ASSERT_NEAR(heightDifference(), 0.0, 1e-6) << "tick " << i << ": the split is the planned one";
-  }
-  const double z0 = heightDifference();
-  // The measured split off the plan's: the force difference loop acts on top of the offsets.
-  m.foot_wrench[1](5) += 50.0;
-  m.foot_wrench[0](5) -= 50.0;
-  s.step(m, kDt, out);
-  EXPECT_GT(heightDifference() - z0, 0.5 * 1e-4 * 100.0 * kDt) << "the overloaded left foot rises";
-  // A swinging foot: no offset.
-  ref.foot[0].contact = false;
-  ref.foot[0].wrench.setZero();
-  ref.foot[1].wrench(5) = mg;
-  s.setReference(ref);
-  s.step(m, kDt, out);
-  EXPECT_EQ(out.compression[0], 0.0);
-  EXPECT_NEAR(out.compression[1], mg / k, 1e-12);
-  // A rigid foot (0): none.
-  p.bushing_vertical_stiffness = 0.0;
-  st::Stabilizer rigid(p);
-  bringOn(rigid, ref);
-  rigid.step(m, kDt, out);
-  EXPECT_EQ(out.compression[0], 0.0);
-  EXPECT_EQ(out.compression[1], 0.0);
-}
-
 // Issue 19: a plan whose whole-body motion carries angular momentum has a whole-body ZMP away
 // from its table-cart ZMP (here 3 cm forward: an arm swing's momentum rate). With the table-cart
 // reference the stabilizer drives the measured ZMP to the table-cart point, i.e. 3 cm off the

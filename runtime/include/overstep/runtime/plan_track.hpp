@@ -101,6 +101,9 @@ class PlanTrack {
   bool planMove(const Eigen::VectorXd& q_now, int samples, Eigen::MatrixXd& out) const;
 
  private:
+  /// Adds to the joint references the offsets that make up for the soles' compression.
+  void compensateVerticalGive(double stiffness);
+
   int joints_ = 0;
   double duration_ = 0.0, rate_ = 200.0;
   std::vector<std::string> joint_names_, phase_names_;
@@ -127,6 +130,9 @@ class PlanTrack {
   std::array<double, 2> ft_scale_{{1.0, 1.0}};
   std::unique_ptr<robots::WholeBodyModel> model_;  ///< for planMove (not used in the tick)
   Eigen::VectorXd q0_;                             ///< the plan's first sample (all coordinates)
+  /// 2 x N, m: each sole's compression under the planned load (the bushings' vertical give,
+  /// which the plan's model lacks); the joint references carry the offsets that make up for it.
+  Eigen::MatrixXd compression_;
   int sole_frame_[2] = {-1, -1};
   int sensor_frame_[2] = {-1, -1};  ///< F/T frames: on the ankle links, at the bushing centres
   int ankle_frame_[2] = {-1, -1};   ///< the ankle links (above the bushings)

@@ -65,12 +65,8 @@ struct TickOutput {
   TrackSample sample;
   stabilizer::Output stab;
   stabilizer::Status stab_status;
-  /// The plan's posture with the model's feed-forward in it (the stabilizer's compression offsets
-  /// for the bushings' vertical give, which the plan's model lacks): what the joints should be at.
-  Eigen::VectorXd q_reference;
-  /// |q_cmd - q_reference| over the joints, rad: the stabilizer's feedback effort.
-  double correction_norm = 0.0;
-  bool clamped = false;  ///< a joint command was clamped to a limit this tick
+  double correction_norm = 0.0;  ///< |q_cmd - q_plan| over the joints, rad (stabilizer effort)
+  bool clamped = false;          ///< a joint command was clamped to a limit this tick
 };
 
 class Replay {

@@ -69,10 +69,6 @@ struct Params {
   double force_difference_gain = 1.0e-4;        ///< m/(N s)
   double force_difference_time_constant = 1.0;  ///< s
   double max_foot_height = 0.02;                ///< m, |height offset| per foot
-  /// N/m, the ankle bushings' vertical stiffness (the robot description's bushing_vertical, set
-  /// by loadParams; 0: a rigid foot). Each foot is commanded lower by its planned normal force /
-  /// this, so the robot stands where the plan, whose model has no such give, puts it.
-  double bushing_vertical_stiffness = 0.0;
 
   // ---- landing (per foot, around each planned touchdown), height offset z (m, up):
   /// late (the reference has landed the foot, its sole carries no load yet): the foot is lowered,

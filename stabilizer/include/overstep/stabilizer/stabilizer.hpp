@@ -88,9 +88,8 @@ struct Measurement {
 struct Output {
   Eigen::Vector3d com_offset = Eigen::Vector3d::Zero();  ///< m, world
   std::array<Eigen::Vector2d, 2> foot_rotation{{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()}};
-  std::array<double, 2> foot_height{{0.0, 0.0}};     ///< m, along world z (all three below)
-  std::array<double, 2> landing_height{{0.0, 0.0}};  ///< m, the landing control's part of it
-  std::array<double, 2> compression{{0.0, 0.0}};  ///< m, the planned load's sole compression in it
+  std::array<double, 2> foot_height{{0.0, 0.0}};            ///< m, along world z (both terms below)
+  std::array<double, 2> landing_height{{0.0, 0.0}};         ///< m, the landing control's part of it
   Eigen::Vector2d body_attitude = Eigen::Vector2d::Zero();  ///< rad, torso roll, pitch
 
   // telemetry
