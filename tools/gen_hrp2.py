@@ -340,7 +340,7 @@ def yaml():
     y.append("# identification of the bushing's 6-D stiffness gives z 239018 N/m [open: sot-torque-control];")
     y.append("# estimators use 40000-150000 [open]. Damping [est]: about a tenth of critical with the robot")
     y.append("# on one foot (2 sqrt(k m) ~ 7500 N s/m). The seed's model and the planner's leave it out;")
-    y.append("# the simulator has it, and the stabilizer lowers each foot by its planned load / stiffness.")
+    y.append("# the simulator has it, and the runtime lengthens each leg in contact by its planned load / stiffness.")
     return "\n".join(y) + "\n"
 
 def main():

@@ -139,7 +139,7 @@ struct RobotDescription {
   std::vector<ElasticJoint> elastic;
   /// The elastic bushings' vertical give (along the sole normal), per foot: N/m and N s/m, 0 for a
   /// rigid foot. The planner's model leaves it out (as the seed does); the simulator has it and
-  /// the stabilizer compensates the planned loads' compression (docs/runtime.md).
+  /// the runtime's plan track makes up for the planned loads' compression (docs/runtime.md).
   double bushing_vertical_stiffness = 0.0;
   double bushing_vertical_damping = 0.0;
   std::vector<FootDescription> feet;  ///< right first, then left (may be empty)
