@@ -62,10 +62,10 @@ struct PlannerConfig {
   /// farthest it can travel before the nearer sample), so that the clearance holds between
   /// samples too. 0: off; 1: the full half-interval travel.
   double swept_clearance = 1.0;
-  /// The plan file's passive (elastic) coordinates in single support integrated between the
+  /// The plan file's passive (elastic) coordinates in single support corrected between the
   /// collocation samples so that they obey their equations of motion under the planned joint
-  /// trajectories, blended back to the solver's own motion before each contact switch
-  /// (OverstepProblem::toPlan, docs/planner.md); false: the splines as solved.
+  /// trajectories: a least-squares boundary-value problem per phase, zero with its rate at each
+  /// contact switch (OverstepProblem::toPlan, docs/planner.md); false: the splines as solved.
   bool passive_polish = true;
   /// Fraction of each joint's velocity limit enforced at the samples (the motion between them
   /// overshoots; measured 9 % at 1.0).
