@@ -197,7 +197,7 @@ PlanTrack::~PlanTrack() = default;
 
 void PlanTrack::compensateVerticalGive(double stiffness) {
   const int N = samples();
-  compression_.setZero(2, N);
+  start_compression_ = {0.0, 0.0};
   if (!(stiffness > 0.0)) return;
   // The plan's model has no vertical give in the bushings: each leg in contact is lengthened by
   // its planned normal force / stiffness along the sole normal (through the leg Jacobian's
@@ -206,9 +206,10 @@ void PlanTrack::compensateVerticalGive(double stiffness) {
   Eigen::MatrixXd dq = Eigen::MatrixXd::Zero(joints_, N);
   for (int k = 0; k < N; ++k)
     for (int f = 0; f < 2; ++f) {
-      compression_(f, k) = std::max(0.0, wrench_[f](5, k)) / stiffness;
+      const double c = std::max(0.0, wrench_[f](5, k)) / stiffness;
+      if (k == 0) start_compression_[std::size_t(f)] = c;
       core::Vector6d dx = core::Vector6d::Zero();
-      dx(5) = -compression_(f, k);
+      dx(5) = -c;
       const Eigen::Matrix<double, 6, 1> dql = leg_inv_[f][std::size_t(k)] * dx;
       for (int i = 0; i < 6; ++i) dq(leg_[std::size_t(f)][std::size_t(i)], k) += dql(i);
     }
@@ -255,7 +256,7 @@ bool PlanTrack::planMove(const Eigen::VectorXd& q_now, int samples, Eigen::Matri
       (ankle_from[1 - anchor].translation() - ankle_to[1 - anchor].translation()).norm() > 2e-3)
     return false;
   // The move ends with each loaded leg lengthened by its sole's compression (as q_to is).
-  for (int f = 0; f < 2; ++f) ankle_to[f].translation().z() -= compression_(f, 0);
+  for (int f = 0; f < 2; ++f) ankle_to[f].translation().z() -= start_compression_[std::size_t(f)];
   for (int k = 0; k < samples; ++k) {
     const double u = static_cast<double>(k) / (samples - 1);
     const double b = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);

@@ -68,9 +68,9 @@ TEST_F(DemoLcm, SmallObstacleRunWritesAConsistentVerdict) {
   }
   // Execution fidelity (issue 19), from the recorded sensor readings, against the issue's
   // targets. With the bushings' vertical give in the simulator and the runtime's compression
-  // offsets, measured on this plan (session 42, seeds 1-3, right / left): no contact loss, loads
-  // <= 0.57 / 0.92, CoP p95 8.6-9.0 / 5.6-5.7 mm, max 14-16 / 9-15 mm, pelvis 5.6 mrad, static at
-  // once. On rigid feet: losses 2 / 1, CoP maxima up to 40 mm, the right touchdown's bounce
+  // offsets, measured on this plan (seeds 1-3, right / left): no contact loss, loads <= 0.57 /
+  // 0.92, CoP p95 8.6-9.0 / 5.6-5.7 mm, max 14-16 / 9-15 mm, pelvis 5.6 mrad, static at once. On
+  // rigid feet: losses 2 / 1, CoP maxima up to 40 mm, the right touchdown's bounce
   // (docs/runtime.md).
   ASSERT_TRUE(v.contains("fidelity")) << v.dump();
   const json& fid = v["fidelity"];

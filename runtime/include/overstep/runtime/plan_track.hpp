@@ -130,9 +130,9 @@ class PlanTrack {
   std::array<double, 2> ft_scale_{{1.0, 1.0}};
   std::unique_ptr<robots::WholeBodyModel> model_;  ///< for planMove (not used in the tick)
   Eigen::VectorXd q0_;                             ///< the plan's first sample (all coordinates)
-  /// 2 x N, m: each sole's compression under the planned load (the bushings' vertical give,
-  /// which the plan's model lacks); the joint references carry the offsets that make up for it.
-  Eigen::MatrixXd compression_;
+  /// m, each sole's compression under the plan's first load (the bushings' vertical give, which
+  /// the plan's model lacks): the move to the start ends with the legs lengthened by it.
+  std::array<double, 2> start_compression_{{0.0, 0.0}};
   int sole_frame_[2] = {-1, -1};
   int sensor_frame_[2] = {-1, -1};  ///< F/T frames: on the ankle links, at the bushing centres
   int ankle_frame_[2] = {-1, -1};   ///< the ankle links (above the bushings)
