@@ -69,7 +69,7 @@ struct Simulator::Impl {
   std::vector<double> bushing_inertia;   // kg m^2, bodies below each bushing about its axis
   std::array<dd::BodyNode*, 2> foot{};   // the foot links (capsules, sensors)
   std::array<dd::BodyNode*, 2> sole{};   // what touches the ground: the foot link, or the body on
-                                         // its vertical bushing spring (sole_stiffness > 0)
+                                         // its vertical bushing spring (bushing_vertical)
   std::array<dd::Joint*, 2> vertical{};  // that spring's prismatic joint (nullptr: rigid)
   std::array<core::FootDescription, 2> foot_desc{};
   std::array<Eigen::Isometry3d, 2> sole_in_foot{
