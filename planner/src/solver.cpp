@@ -1,7 +1,9 @@
 #include "overstep/planner/solver.hpp"
 
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <nlopt.hpp>
 #include <optional>
 
@@ -18,6 +20,12 @@ constexpr int kInfeasibleStall = 80;
 /// 40 iterations without a 1e-4 better objective took that plan from 371 Jacobians, 121 s to
 /// 765, 267 s for an objective of 1.92; docs/history/planner.md, session 29).
 constexpr int kFeasibleBudget = 40;
+/// The same budget in the homotopy's intermediate stages, whose solutions only start the next
+/// stage. Their objective matters for where the target stage starts (ending them at their first
+/// feasible point left the default bar with no valid plan; docs/history/planner.md), but 15
+/// iterations of it do: with 40 instead, the default bar and five of the six perturbed bars took
+/// 141-166 s, with 15 83-119 s, all valid (measured before the switch-corner rows).
+constexpr int kIntermediateBudget = 15;
 
 using Clock = std::chrono::steady_clock;
 
@@ -58,6 +66,7 @@ class NloptSolver final : public NlpSolver {
     State s(problem, *this, stage);
     s.D = D;
     s.max_iterations = max_iterations > 0 ? max_iterations : settings_.max_iterations;
+    s.feasible_budget = problem.lastStage() ? kFeasibleBudget : kIntermediateBudget;
     {
       // The objective enters at O(1): SLSQP's line search and QP are sensitive to its scale.
       Evaluation e0;
@@ -135,6 +144,7 @@ class NloptSolver final : public NlpSolver {
     double fscale = 1.0;
     Eigen::VectorXd D;  // variable scale: x = D .* x_solver
     int max_iterations = 0;
+    int feasible_budget = kFeasibleBudget;
     int feasible_count = 0;  // iterations since the best point became feasible
     double infeasible_reference = std::numeric_limits<double>::infinity();
     int infeasible_count = 0;
@@ -178,7 +188,7 @@ class NloptSolver final : public NlpSolver {
       // SLSQP can cycle between two iterates for hundreds of iterations (measured): a stage ends
       // kFeasibleBudget iterations after its first feasible point.
       if (s.best_violation <= kFeasibilityTolerance) {
-        if (++s.feasible_count >= kFeasibleBudget) s.stalled = true;
+        if (++s.feasible_count >= s.feasible_budget) s.stalled = true;
       } else if (s.best_violation < s.infeasible_reference * 0.99) {
         s.infeasible_reference = s.best_violation;
         s.infeasible_count = 0;
@@ -247,6 +257,11 @@ class NloptSolver final : public NlpSolver {
 
 /// Restoration steps after a stage that SLSQP left infeasible.
 constexpr int kPolishIterations = 400;
+/// A restoration far from feasibility (largest scaled violation above kStallAbove) whose last
+/// kStallSteps steps took less than kStallDecrease of it off ends: SLSQP does better from there.
+constexpr int kStallSteps = 10;
+constexpr double kStallDecrease = 1e-2;
+constexpr double kStallAbove = 10.0 * kFeasibilityTolerance;
 /// Continuation step control: a stage that ends infeasible is solved again after a stage halfway
 /// between it and the last stage that ended feasible, from that stage's solution; at most this
 /// many such stages per solve.
@@ -287,6 +302,13 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
   Eigen::VectorXd grad;
   Eigen::MatrixXd jin, jeq;
   int next_ask = 0, gap = 5;  // when `accept` is asked next (a step count), and then how often
+  // The largest violations after the last kStallSteps steps: far from feasibility (above
+  // kStallAbove) the restoration ends once that many steps took less than kStallDecrease of it
+  // off (the kinematic guess's on the default bar: 33 of its 60 steps between 0.938 and 0.905,
+  // a standing leg in the target bar, which the first stage's SLSQP resolves). Near the tolerance
+  // it crawls at well under 1 % per ten steps and still ends feasible (measured), so it goes on.
+  std::array<double, kStallSteps> history;
+  history.fill(std::numeric_limits<double>::infinity());
   for (int it = 0; it < max_iterations; ++it) {
     const double viol = NloptSolver::maxViolation(e);
     if (viol <= 0.1 * kFeasibilityTolerance) break;
@@ -364,6 +386,13 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
       on_iter(info);
     }
     if (!accepted) break;
+    const double now = NloptSolver::maxViolation(e);
+    double& oldest = history[static_cast<std::size_t>(it % kStallSteps)];
+    if (now > kStallAbove && now > (1.0 - kStallDecrease) * oldest) {
+      out.stalled = true;
+      break;
+    }
+    oldest = now;
   }
   out.x = x;
   out.max_violation = NloptSolver::maxViolation(e);
