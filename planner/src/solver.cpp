@@ -186,7 +186,8 @@ class NloptSolver final : public NlpSolver {
       s.last_iterate = s.x;
       if (s.self.on_iteration_) s.self.on_iteration_(info);
       // SLSQP can cycle between two iterates for hundreds of iterations (measured): a stage ends
-      // kFeasibleBudget iterations after its first feasible point.
+      // its budget of iterations (kFeasibleBudget, kIntermediateBudget) after its first feasible
+      // point.
       if (s.best_violation <= kFeasibilityTolerance) {
         if (++s.feasible_count >= s.feasible_budget) s.stalled = true;
       } else if (s.best_violation < s.infeasible_reference * 0.99) {
