@@ -389,10 +389,7 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
     if (!accepted) break;
     const double now = NloptSolver::maxViolation(e);
     double& oldest = history[static_cast<std::size_t>(it % kStallSteps)];
-    if (now > kStallAbove && now > (1.0 - kStallDecrease) * oldest) {
-      out.stalled = true;
-      break;
-    }
+    if (now > kStallAbove && now > (1.0 - kStallDecrease) * oldest) break;
     oldest = now;
   }
   out.x = x;

@@ -80,7 +80,6 @@ struct RestorationResult {
   bool timed_out = false;  ///< stopped by its time limit
   bool accepted = false;   ///< stopped because `accept` took a feasible iterate
   int refusals = 0;        ///< feasible iterates `accept` refused
-  bool stalled = false;    ///< far from feasible, ten steps took less than 1 % of it off
 };
 
 /// Judges a feasible solution vector by a finer measure than the rows at the samples (e.g. the
@@ -90,7 +89,7 @@ using AcceptFn = std::function<bool(const Eigen::VectorXd&)>;
 /// Drives x toward feasibility (least squares on the violations, bounds respected). Stops after
 /// `max_iterations` steps, on `stop`, once `time_limit_s` of wall time has passed (checked
 /// before each step; <= 0: no step at all), or when, with its largest violation above ten times
-/// the tolerance, ten steps took less than 1 % off it (`stalled`). Without `accept` it aims at a
+/// the tolerance, ten steps took less than 1 % off it. Without `accept` it aims at a
 /// tenth of kFeasibilityTolerance; with it, it also stops at the first iterate within
 /// `accept_below` (scaled violation; by default the feasibility tolerance) that `accept` takes
 /// (asked at the first such iterate, then after 5, 10, 20, ... more steps); asking changes no step.
