@@ -274,11 +274,11 @@ int runPlan(const PlanOptions& o) {
   std::fprintf(log, "overstep plan: %d variables, %d inequalities, %d equalities, %s, %d threads\n",
                problem.layout().total, problem.inequalityCount(), problem.equalityCount(),
                cfg.solver.algorithm.c_str(), cfg.solver.threads);
-  std::fprintf(log, "%5s %5s %14s %12s %10s %9s\n", "stage", "iter", "objective", "max viol",
-               "step", "elapsed");
+  std::fprintf(log, "%5s %5s %14s %12s %10s %9s  %s\n", "stage", "iter", "objective", "max viol",
+               "step", "elapsed", "most violated row");
   auto row = [log](const planner::IterationInfo& i) {
-    std::fprintf(log, "%5d %5d %14.6g %12.3g %10.3g %8.1fs\n", i.stage, i.iteration, i.objective,
-                 i.max_violation, i.step, i.elapsed);
+    std::fprintf(log, "%5d %5d %14.6g %12.3g %10.3g %8.1fs  %s\n", i.stage, i.iteration,
+                 i.objective, i.max_violation, i.step, i.elapsed, i.worst.c_str());
     std::fflush(log);
   };
   auto solver = planner::makeNloptSolver(cfg.solver, row, &cli::StopSignals::flag());

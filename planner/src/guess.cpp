@@ -17,6 +17,35 @@ Eigen::Vector2d lerp(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double 
 
 }  // namespace
 
+/// The guess's pelvis height (base z) with the pelvis at (x, y) and the soles flat at the feet's
+/// placements (lifted by `lift`): as high as both legs allow, each hip-ankle distance (the leg
+/// solution's centres H and A) at most leg_reach less guess_reach_margin, and at most
+/// half-sitting. A lower pelvis bends the knees: in the double support between the steps the
+/// rear leg's shank then leans over the bar (measured: the guess's restoration stuck at a
+/// violation of 0.9 there with the pelvis 0.19 m down throughout). The ankle centre follows from
+/// the sole placement and the bushing deflection in q, not from the leg's joints.
+double OverstepProblem::Impl::pelvisHeight(robots::WholeBodyModel& model, const Eigen::VectorXd& q,
+                                           const Eigen::Vector2d& pelvis,
+                                           const Eigen::Vector2d feet2[2],
+                                           const double lift[2]) const {
+  model.setPositions(q);
+  const double R = cfg.leg_reach - cfg.guess_reach_margin;
+  double z = q_rest(5);
+  for (int f = 0; f < 2; ++f) {
+    const Eigen::Isometry3d X_SA =
+        model.framePose(sole_frame[f]).inverse() * model.framePose(ankle_link_frame[f]);
+    const Eigen::Vector3d p_WS(feet2[f].x(), feet2[f].y(), lift[f]);
+    const Eigen::Vector3d p_WA =
+        p_WS + X_SA.linear() * leg_ik[f]->ankleCentre() + X_SA.translation();
+    const Eigen::Vector3d p_BH = leg_ik[f]->hipCentre();  // base frame, unrotated in the guess
+    const double d2 = (pelvis + p_BH.head<2>() - p_WA.head<2>()).squaredNorm();
+    // Out of reach at any height (a step beyond the leg): the hip at the ankle's height.
+    const double rise = d2 < R * R ? std::sqrt(R * R - d2) : 0.0;
+    z = std::min(z, p_WA.z() + rise - p_BH.z());
+  }
+  return z;
+}
+
 Eigen::VectorXd OverstepProblem::initialGuess() {
   Impl& m = *impl_;
   const auto& c = m.cfg;
@@ -35,7 +64,6 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
   spline.setTiming(timing);
   flex_spline.setTiming(timing);
   robots::WholeBodyModel& model = *m.ws.front().model;
-  const double z_rest = m.q_rest(5);
   const double z_top = m.height + c.guess_swing_clearance;
 
   const int M = 240;
@@ -47,9 +75,6 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
     const double t = timing.total() * k / (M - 1);
     const GridPoint g = timing.locate(t);
     const double s = g.s;
-    double drop = c.guess_pelvis_drop;
-    if (g.phase == 0) drop *= smooth(s);
-    if (g.phase == 4) drop *= 1.0 - smooth(s);
     Eigen::Vector2d com_target;
     Eigen::Vector2d feet2[2] = {R0, L0};
     double lift[2] = {0.0, 0.0};
@@ -98,11 +123,14 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
         }
       }
     };
-    for (int iter = 0; iter < 6; ++iter) {
+    auto placeBase = [&]() {
       q.head<6>().setZero();
       q(3) = pelvis.x();
       q(4) = pelvis.y();
-      q(5) = z_rest - drop;
+      q(5) = m.pelvisHeight(model, q, pelvis, feet2, lift);
+    };
+    for (int iter = 0; iter < 6; ++iter) {
+      placeBase();
       solveLegs();
       model.setPositions(q);
       pelvis += com_target - model.com().head<2>();
@@ -133,6 +161,7 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
         }
       }
     }
+    placeBase();
     solveLegs();  // the feet flat again over the final ankle deflection
     for (int j = 0; j < 12; ++j) Y(j, k) = q(m.leg_coord[static_cast<std::size_t>(j)]);
     for (int j = 0; j < 4; ++j) Y(12 + j, k) = q(m.flex_coord[static_cast<std::size_t>(j)]);

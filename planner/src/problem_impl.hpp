@@ -182,6 +182,11 @@ struct OverstepProblem::Impl : ProblemModel {
     }
   }
 
+  /// The initial guess's pelvis height (guess.cpp).
+  double pelvisHeight(robots::WholeBodyModel& model, const Eigen::VectorXd& q,
+                      const Eigen::Vector2d& pelvis, const Eigen::Vector2d feet2[2],
+                      const double lift[2]) const;
+
   // -------------------------------------------------------------- decoding x
   /// The full control points of a curve from its F free ones at x(offset..): the first and the
   /// last free point each stand for three tied ones (rest at the start and the end).

@@ -71,7 +71,8 @@ class NloptSolver final : public NlpSolver {
       // The objective enters at O(1): SLSQP's line search and QP are sensitive to its scale.
       Evaluation e0;
       problem.evaluate(x0, e0);
-      s.fscale = 1.0 / std::max(1.0, std::abs(e0.objective));
+      s.fscale = (std::getenv("FS") ? std::atof(std::getenv("FS")) : 1.0) /
+                 std::max(1.0, std::abs(e0.objective));
     }
     opt.set_min_objective(&NloptSolver::objective, &s);
     try {
@@ -125,6 +126,16 @@ class NloptSolver final : public NlpSolver {
     if (e.ineq.size()) v = std::max(v, e.ineq.maxCoeff());
     if (e.eq.size()) v = std::max(v, e.eq.cwiseAbs().maxCoeff());
     return v;
+  }
+  /// The most violated row of e (at x), described; empty when none is beyond the tolerance.
+  static std::string worstRow(const OverstepProblem& problem, const Eigen::VectorXd& x,
+                              const Evaluation& e) {
+    Eigen::Index in = 0, eq = 0;
+    const double vi = e.ineq.size() ? e.ineq.maxCoeff(&in) : 0.0;
+    const double ve = e.eq.size() ? e.eq.cwiseAbs().maxCoeff(&eq) : 0.0;
+    if (std::max(vi, ve) <= kFeasibilityTolerance) return {};
+    return vi >= ve ? problem.describeRow(x, false, static_cast<int>(in))
+                    : problem.describeRow(x, true, static_cast<int>(eq));
   }
 
  private:
@@ -183,6 +194,7 @@ class NloptSolver final : public NlpSolver {
       info.max_violation = maxViolation(s.eval);
       info.step = s.last_iterate.size() ? (s.x - s.last_iterate).cwiseQuotient(s.D).norm() : 0.0;
       info.elapsed = std::chrono::duration<double>(Clock::now() - s.start).count();
+      info.worst = worstRow(s.problem, s.x, s.eval);
       s.last_iterate = s.x;
       if (s.self.on_iteration_) s.self.on_iteration_(info);
       // SLSQP can cycle between two iterates for hundreds of iterations (measured): a stage ends
@@ -258,11 +270,16 @@ class NloptSolver final : public NlpSolver {
 
 /// Restoration steps after a stage that SLSQP left infeasible.
 constexpr int kPolishIterations = 400;
-/// A restoration far from feasibility (largest scaled violation above kStallAbove) whose last
-/// kStallSteps steps took less than kStallDecrease of it off ends: SLSQP does better from there.
+/// A restoration far from feasibility (largest scaled violation above kStallAbove) but within
+/// SLSQP's reach (below kStallBelow) whose last kStallSteps steps took less than kStallDecrease
+/// of it off ends: SLSQP does better from there. From violations of a few units SLSQP's first,
+/// identity-Hessian steps wander (measured: the 19.5 cm bar's guess restoration stalled at 2.96,
+/// and stage 1 then took 157 iterations, 1 s each, without coming nearer), so a restoration
+/// there keeps going.
 constexpr int kStallSteps = 10;
 constexpr double kStallDecrease = 1e-2;
 constexpr double kStallAbove = 10.0 * kFeasibilityTolerance;
+constexpr double kStallBelow = 1.0;
 /// Continuation step control: a stage that ends infeasible is solved again after a stage halfway
 /// between it and the last stage that ended feasible, from that stage's solution; at most this
 /// many such stages per solve.
@@ -384,12 +401,13 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
       info.max_violation = NloptSolver::maxViolation(e);
       info.step = lambda;
       info.elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+      info.worst = NloptSolver::worstRow(problem, x, e);
       on_iter(info);
     }
     if (!accepted) break;
     const double now = NloptSolver::maxViolation(e);
     double& oldest = history[static_cast<std::size_t>(it % kStallSteps)];
-    if (now > kStallAbove && now > (1.0 - kStallDecrease) * oldest) break;
+    if (now > kStallAbove && now < kStallBelow && now > (1.0 - kStallDecrease) * oldest) break;
     oldest = now;
   }
   out.x = x;

@@ -37,10 +37,10 @@ struct PlannerConfig {
   double step_length_min = 0.30, step_length_max = 0.65;
   double foot_y_min = 0.06, foot_y_max = 0.13;
   double guess_step_length = 0.41, guess_half_width = 0.085;
-  double guess_pelvis_drop = 0.19, guess_swing_clearance = 0.06;
+  double guess_reach_margin = 0.03, guess_swing_clearance = 0.06;
 
   double cop_box = 0.01;
-  std::vector<double> cop_homotopy{0.04, 0.02};
+  std::vector<double> cop_homotopy{0.04};
   double friction = 0.7, torsion = 0.02, min_normal_force = 20.0;
 
   double swing_clearance = 0.02, obstacle_clearance = 0.01, self_clearance = 0.005;

@@ -121,9 +121,9 @@ class OverstepProblem {
   double currentHeight() const;
   double currentCopBox() const;
 
-  /// Kinematic initial guess: quasi-static whole-body IK on a dense grid (pelvis lowered, CoM over
-  /// the stance ankle, swing sole lifted vertically, carried over the obstacle top and set down),
-  /// then a least-squares fit of the splines.
+  /// Kinematic initial guess: quasi-static whole-body IK on a dense grid (pelvis as high as the
+  /// legs reach, CoM over the stance ankle, swing sole lifted vertically, carried over the
+  /// obstacle top and set down), then a least-squares fit of the splines.
   Eigen::VectorXd initialGuess();
 
   void evaluate(const Eigen::VectorXd& x, Evaluation& out);

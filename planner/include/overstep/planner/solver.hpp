@@ -21,6 +21,8 @@ struct IterationInfo {
   double max_violation = 0.0;  ///< largest scaled constraint violation
   double step = 0.0;           ///< |x_k - x_{k-1}|
   double elapsed = 0.0;        ///< s since the solve began
+  /// The most violated row (OverstepProblem::describeRow); empty when every row holds.
+  std::string worst;
 };
 
 struct SolveResult {
