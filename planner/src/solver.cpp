@@ -73,8 +73,7 @@ class NloptSolver final : public NlpSolver {
       // The objective enters at O(1): SLSQP's line search and QP are sensitive to its scale.
       Evaluation e0;
       problem.evaluate(x0, e0);
-      s.fscale = (std::getenv("FS") ? std::atof(std::getenv("FS")) : 1.0) /
-                 std::max(1.0, std::abs(e0.objective));
+      s.fscale = 1.0 / std::max(1.0, std::abs(e0.objective));
     }
     opt.set_min_objective(&NloptSolver::objective, &s);
     try {
