@@ -231,10 +231,9 @@ TEST_F(Problem, InitialGuessIsInsideTheBounds) {
 
 // Every column of the Jacobian and the gradient against central differences of whole
 // evaluations, on a restored point (the next test covers the guess too), with check points in
-// the grid. The
-// Jacobian's columns are forward differences: on rows with curvature on small scales (smooth
-// minima over 1 mm of distance) their error is about a percent, hence the tolerance; an entry
-// whose row is not differentiable at the point (a kink at x, where one-sided differences
+// the grid. The Jacobian's columns are forward differences: on rows with curvature on small scales
+// (smooth minima over 1 mm of distance) their error is about a percent, hence the tolerance; an
+// entry whose row is not differentiable at the point (a kink at x, where one-sided differences
 // disagree, or within the steps, where central differences at a tenth and ten times the step
 // disagree: e.g. the distance of two parallel capsules, the feet side by side, in their yaw)
 // is left out.
@@ -244,57 +243,55 @@ TEST_F(Problem, DerivativesMatchCentralDifferencesInEveryColumn) {
   ob.height = 0.05;
   OverstepProblem refined(*model_, PlannerConfig{}, ob, extra);
   constexpr double kTolerance = 2e-2;
-  for (const Eigen::VectorXd& x : {restored()}) {
-    Evaluation e0;
-    refined.evaluate(x, e0);
-    Eigen::VectorXd g = Eigen::VectorXd::Constant(x.size(), std::nan(""));
-    Eigen::MatrixXd ji =
-        Eigen::MatrixXd::Constant(refined.inequalityCount(), x.size(), std::nan(""));
-    Eigen::MatrixXd je = Eigen::MatrixXd::Constant(refined.equalityCount(), x.size(), std::nan(""));
-    refined.derivatives(x, e0, g, ji, je);
-    ASSERT_TRUE(g.allFinite() && ji.allFinite() && je.allFinite());
-    Eigen::VectorXd v0(1 + e0.ineq.size() + e0.eq.size());
-    v0 << e0.objective, e0.ineq, e0.eq;
-    auto at = [&](int j, double h) {
-      Eigen::VectorXd xh = x;
-      xh(j) += h;
-      Evaluation e;
-      refined.evaluate(xh, e);
-      Eigen::VectorXd v(v0.size());
-      v << e.objective, e.ineq, e.eq;
-      return v;
-    };
-    const int ni = refined.inequalityCount();
-    for (int j = 0; j < x.size(); ++j) {
-      const double h = 1e-7 * std::max(1.0, std::abs(x(j)));
-      Eigen::VectorXd J(1 + ji.rows() + je.rows());
-      J << g(j), ji.col(j), je.col(j);
-      const Eigen::VectorXd vp = at(j, h), vm = at(j, -h);
-      const Eigen::VectorXd fd = (vp - vm) / (2 * h);
-      Eigen::VectorXd err = (J - fd).cwiseAbs();
-      const double tol = kTolerance * (1.0 + fd.cwiseAbs().maxCoeff());
-      if (err.maxCoeff() > tol) {
-        // Not differentiable: one-sided differences disagree (a kink at x), or central ones at
-        // a tenth of the step or ten times it (a kink within the steps the Jacobian takes).
-        const Eigen::VectorXd fd_small = (at(j, 0.1 * h) - at(j, -0.1 * h)) / (0.2 * h);
-        const Eigen::VectorXd fd_large = (at(j, 10 * h) - at(j, -10 * h)) / (20 * h);
-        const Eigen::VectorXd fwd = (vp - v0) / h, bwd = (v0 - vm) / h;
-        for (Eigen::Index r = 0; r < err.size(); ++r) {
-          const double s = kTolerance * (1.0 + std::abs(fd(r)));
-          if (std::abs(fd(r) - fd_small(r)) > s || std::abs(fd(r) - fd_large(r)) > s ||
-              std::abs(fwd(r) - bwd(r)) > s)
-            err(r) = 0.0;
-        }
+  const Eigen::VectorXd& x = restored();
+  Evaluation e0;
+  refined.evaluate(x, e0);
+  Eigen::VectorXd g = Eigen::VectorXd::Constant(x.size(), std::nan(""));
+  Eigen::MatrixXd ji = Eigen::MatrixXd::Constant(refined.inequalityCount(), x.size(), std::nan(""));
+  Eigen::MatrixXd je = Eigen::MatrixXd::Constant(refined.equalityCount(), x.size(), std::nan(""));
+  refined.derivatives(x, e0, g, ji, je);
+  ASSERT_TRUE(g.allFinite() && ji.allFinite() && je.allFinite());
+  Eigen::VectorXd v0(1 + e0.ineq.size() + e0.eq.size());
+  v0 << e0.objective, e0.ineq, e0.eq;
+  auto at = [&](int j, double h) {
+    Eigen::VectorXd xh = x;
+    xh(j) += h;
+    Evaluation e;
+    refined.evaluate(xh, e);
+    Eigen::VectorXd v(v0.size());
+    v << e.objective, e.ineq, e.eq;
+    return v;
+  };
+  const int ni = refined.inequalityCount();
+  for (int j = 0; j < x.size(); ++j) {
+    const double h = 1e-7 * std::max(1.0, std::abs(x(j)));
+    Eigen::VectorXd J(1 + ji.rows() + je.rows());
+    J << g(j), ji.col(j), je.col(j);
+    const Eigen::VectorXd vp = at(j, h), vm = at(j, -h);
+    const Eigen::VectorXd fd = (vp - vm) / (2 * h);
+    Eigen::VectorXd err = (J - fd).cwiseAbs();
+    const double tol = kTolerance * (1.0 + fd.cwiseAbs().maxCoeff());
+    if (err.maxCoeff() > tol) {
+      // Not differentiable: one-sided differences disagree (a kink at x), or central ones at
+      // a tenth of the step or ten times it (a kink within the steps the Jacobian takes).
+      const Eigen::VectorXd fd_small = (at(j, 0.1 * h) - at(j, -0.1 * h)) / (0.2 * h);
+      const Eigen::VectorXd fd_large = (at(j, 10 * h) - at(j, -10 * h)) / (20 * h);
+      const Eigen::VectorXd fwd = (vp - v0) / h, bwd = (v0 - vm) / h;
+      for (Eigen::Index r = 0; r < err.size(); ++r) {
+        const double s = kTolerance * (1.0 + std::abs(fd(r)));
+        if (std::abs(fd(r) - fd_small(r)) > s || std::abs(fd(r) - fd_large(r)) > s ||
+            std::abs(fwd(r) - bwd(r)) > s)
+          err(r) = 0.0;
       }
-      Eigen::Index r = 0;
-      const double worst = err.maxCoeff(&r);
-      const int row = static_cast<int>(r) - 1;
-      ASSERT_LE(worst, tol) << "column " << j << ": "
-                            << (row < 0    ? std::string("objective")
-                                : row < ni ? refined.describeRow(x, false, row)
-                                           : refined.describeRow(x, true, row - ni))
-                            << ", derivative " << J(r) << ", central difference " << fd(r);
     }
+    Eigen::Index r = 0;
+    const double worst = err.maxCoeff(&r);
+    const int row = static_cast<int>(r) - 1;
+    ASSERT_LE(worst, tol) << "column " << j << ": "
+                          << (row < 0    ? std::string("objective")
+                              : row < ni ? refined.describeRow(x, false, row)
+                                         : refined.describeRow(x, true, row - ni))
+                          << ", derivative " << J(r) << ", central difference " << fd(r);
   }
 }
 
