@@ -293,7 +293,8 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
                                      int max_iterations, const std::atomic<bool>* stop,
                                      const std::function<void(const IterationInfo&)>& on_iter,
                                      double time_limit_s, const AcceptFn& accept,
-                                     double accept_below, int refusals_to_stop) {
+                                     double accept_below, int refusals_to_stop,
+                                     RestorationGoal goal) {
   // Projected Levenberg-Marquardt on the violation residuals r = [max(0, g); h] (rows near
   // activity keep their Jacobians so the step does not break them). NLopt offers no
   // least-squares method; SLSQP started far from feasibility stalls (measured: docs/planner.md).
@@ -325,12 +326,18 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
   // kStallAbove) the restoration ends once that many steps took less than kStallDecrease of it
   // off (the kinematic guess's on the default bar: 33 of its 60 steps between 0.938 and 0.905,
   // a standing leg in the target bar, which the first stage's SLSQP resolves). Near the tolerance
-  // it crawls at well under 1 % per ten steps and still ends feasible (measured), so it goes on.
+  // it crawls at well under 1 % per ten steps and still ends feasible (measured), so a polish
+  // goes on. A projection (the start of a stage solve) has no use for those steps: it ends at
+  // the tolerance and stalls anywhere above it (the default's projections spent their last 20-25
+  // of 40 steps crawling, e.g. 0.026 -> 0.024; ending there took the plan from 64 s to 59 s).
   std::array<double, kStallSteps> history;
   history.fill(std::numeric_limits<double>::infinity());
+  const bool project = goal == RestorationGoal::Project;
+  const double done_below = project ? kFeasibilityTolerance : 0.1 * kFeasibilityTolerance;
+  const double stall_above = project ? kFeasibilityTolerance : kStallAbove;
   for (int it = 0; it < max_iterations; ++it) {
     const double viol = NloptSolver::maxViolation(e);
-    if (viol <= 0.1 * kFeasibilityTolerance) break;
+    if (viol <= done_below) break;
     if (accept && viol <= accept_below && it >= next_ask) {
       if (accept(x)) {
         out.accepted = true;
@@ -408,7 +415,7 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
     if (!accepted) break;
     const double now = NloptSolver::maxViolation(e);
     double& oldest = history[static_cast<std::size_t>(it % kStallSteps)];
-    if (now > kStallAbove && now < kStallBelow && now > (1.0 - kStallDecrease) * oldest) break;
+    if (now > stall_above && now < kStallBelow && now > (1.0 - kStallDecrease) * oldest) break;
     oldest = now;
   }
   out.x = x;
@@ -442,11 +449,11 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     return result;
   };
   auto restore = [&](const Eigen::VectorXd& from, int iterations, const AcceptFn& take = {},
-                     int refusals_to_stop = 0) {
+                     int refusals_to_stop = 0, RestorationGoal goal = RestorationGoal::Polish) {
     return accounted(out.split.restoration, [&] {
       return restoreFeasibility(problem, from, iterations, stop, on_restore,
                                 time_limit_s - elapsed(), take, kFeasibilityTolerance,
-                                refusals_to_stop);
+                                refusals_to_stop, goal);
     });
   };
   // The result is x itself (no stage solve ended the plan).
@@ -497,7 +504,7 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     problem.setDifficulty(stages.front().first, stages.front().second, stages.size() == 1);
     x = problem.initialGuess();
     if (on_stage) on_stage("restoring feasibility of the kinematic guess (Levenberg-Marquardt)");
-    const RestorationResult rest = restore(x, 60);
+    const RestorationResult rest = restore(x, 60, {}, 0, RestorationGoal::Project);
     x = rest.x;
     out.iterations += rest.iterations;
   }
@@ -522,7 +529,7 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     if (i > 0 && warm_start == nullptr) {
       // A harder stage starts infeasible (e.g. violations ~2 when the CoP box halves); SLSQP's
       // identity-Hessian steps from there wander (measured). Project back first.
-      const RestorationResult proj = restore(x, 40);
+      const RestorationResult proj = restore(x, 40, {}, 0, RestorationGoal::Project);
       out.iterations += proj.iterations;
       x = proj.x;
     }

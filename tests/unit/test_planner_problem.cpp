@@ -137,6 +137,51 @@ TEST_F(Problem, RestorationStopsWhereAcceptTakesAPoint) {
   EXPECT_LT(stopped.iterations, plain.iterations);
 }
 
+// A projection (the start of a stage solve) takes the polish's steps, bit for bit, and ends at
+// the first iterate within the feasibility tolerance, or once ten steps took less than 1 % off
+// a violation above it; the polish goes on toward a tenth of the tolerance.
+TEST_F(Problem, ProjectionEndsAtTheToleranceOnThePolishPath) {
+  OverstepProblem& p = *raw_;
+  const Eigen::VectorXd x0 = restored();  // at the suite's difficulty
+  // The homotopy's first CoP box (4 cm), within which the restored point is feasible after a few
+  // steps; the suite's difficulty is set back at the end.
+  const double h = p.currentHeight(), box = p.currentCopBox();
+  const bool last = p.lastStage();
+  p.setDifficulty(h, 0.04, false);
+  constexpr int kSteps = 30;
+  const auto inf = std::numeric_limits<double>::infinity();
+  std::vector<double> viol;  // after each polish step
+  const auto record = [&](const IterationInfo& i) { viol.push_back(i.max_violation); };
+  const RestorationResult polish = restoreFeasibility(p, x0, kSteps, nullptr, record);
+  const RestorationResult project = restoreFeasibility(
+      p, x0, kSteps, nullptr, nullptr, inf, {}, kFeasibilityTolerance, 0, RestorationGoal::Project);
+  ASSERT_EQ(static_cast<int>(viol.size()), polish.iterations);
+  // Where the projection must end: the polish's first feasible iterate or its first stall.
+  int expected = polish.iterations;
+  Evaluation e0;
+  p.evaluate(x0, e0);
+  const double v0 = std::max(e0.ineq.maxCoeff(), e0.eq.cwiseAbs().maxCoeff());
+  for (int k = 0; k <= polish.iterations; ++k) {
+    const double v = k == 0 ? v0 : viol[static_cast<std::size_t>(k - 1)];
+    // The stall rule compares a step's result with the one ten steps before (from the 11th on).
+    const double ten_before = k >= 11 ? viol[static_cast<std::size_t>(k - 11)] : inf;
+    if (v <= kFeasibilityTolerance || (v < 1.0 && v > 0.99 * ten_before)) {
+      expected = k;
+      break;
+    }
+  }
+  EXPECT_EQ(project.iterations, expected);
+  EXPECT_LE(project.iterations, polish.iterations);
+  if (expected < polish.iterations) {
+    // The same point as the polish's iterate there (a second polish, stopped by its step cap).
+    const RestorationResult cut = restoreFeasibility(p, x0, expected, nullptr, nullptr);
+    EXPECT_EQ(project.x, cut.x);
+  }
+  std::printf("projection: %d of the polish's %d steps, violation %.4g (polish %.4g)\n",
+              project.iterations, polish.iterations, project.max_violation, polish.max_violation);
+  p.setDifficulty(h, box, last);
+}
+
 // The height homotopy raises the bar under a swinging leg only: the obstacle row of a sample
 // whose legs are both on the ground reads the target bar at every stage; a single-support row
 // reads the stage's bar (lower bar, more clearance).

@@ -88,11 +88,17 @@ struct RestorationResult {
 /// plan's 1 kHz check); true: good enough to stop at.
 using AcceptFn = std::function<bool(const Eigen::VectorXd&)>;
 
+/// What a restoration is for. Polish: a feasible point to end a stage at; it aims at a tenth of
+/// kFeasibilityTolerance and gives up only far from it. Project: the start of a stage solve, which
+/// SLSQP takes from any point near the feasible set; it ends at the tolerance, or once it crawls.
+enum class RestorationGoal { Polish, Project };
+
 /// Drives x toward feasibility (least squares on the violations, bounds respected). Stops after
 /// `max_iterations` steps, on `stop`, once `time_limit_s` of wall time has passed (checked
 /// before each step; <= 0: no step at all), or when, with its largest violation above ten times
-/// the tolerance, ten steps took less than 1 % off it. Without `accept` it aims at a
-/// tenth of kFeasibilityTolerance; with it, it also stops at the first iterate within
+/// the tolerance (Project: above the tolerance), ten steps took less than 1 % off it. Without
+/// `accept` it aims at a tenth of kFeasibilityTolerance (Project: the tolerance); with it, it also
+/// stops at the first iterate within
 /// `accept_below` (scaled violation; by default the feasibility tolerance) that `accept` takes
 /// (asked at the first such iterate, then after 5, 10, 20, ... more steps); asking changes no step.
 /// With `refusals_to_stop` > 0 it also stops, feasible and not accepted, once `accept` has refused
@@ -103,7 +109,8 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
                                      double time_limit_s = std::numeric_limits<double>::infinity(),
                                      const AcceptFn& accept = {},
                                      double accept_below = kFeasibilityTolerance,
-                                     int refusals_to_stop = 0);
+                                     int refusals_to_stop = 0,
+                                     RestorationGoal goal = RestorationGoal::Polish);
 
 /// Runs the homotopy from the kinematic guess (after a feasibility restoration) to the target
 /// obstacle and CoP box; with `warm_start` (a solution vector of this problem's layout, e.g. a
