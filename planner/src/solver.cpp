@@ -278,14 +278,14 @@ constexpr int kPolishIterations = 400;
 /// and stage 1 then took 157 iterations, 1 s each, without coming nearer), so a restoration
 /// there keeps going.
 constexpr int kStallSteps = 10;
+constexpr double kStallDecrease = 1e-2;
+constexpr double kStallAbove = 10.0 * kFeasibilityTolerance;
+constexpr double kStallBelow = 1.0;
 /// Damping increases (x5 each) a restoration step may try before the restoration ends: lambda up
 /// to 1e-3 * 5^13 ~ 1e6 x diag(J^T J). With 8 (lambda up to ~400) the 1.5 kg chest payload's
 /// warm start from the default plan ended on its first step at 0.36 and SLSQP took 21 s; the
 /// first steps needed lambda 650-3000, after which it was projected in 3 s.
 constexpr int kStepTries = 14;
-constexpr double kStallDecrease = 1e-2;
-constexpr double kStallAbove = 10.0 * kFeasibilityTolerance;
-constexpr double kStallBelow = 1.0;
 /// Continuation step control: a stage that ends infeasible is solved again after a stage halfway
 /// between it and the last stage that ended feasible, from that stage's solution; at most this
 /// many such stages per solve.

@@ -98,9 +98,9 @@ enum class RestorationGoal { Polish, Project };
 /// before each step; <= 0: no step at all), or when, with its largest violation above ten times
 /// the tolerance (Project: above the tolerance), ten steps took less than 1 % off it. Without
 /// `accept` it aims at a tenth of kFeasibilityTolerance (Project: the tolerance); with it, it also
-/// stops at the first iterate within
-/// `accept_below` (scaled violation; by default the feasibility tolerance) that `accept` takes
-/// (asked at the first such iterate, then after 5, 10, 20, ... more steps); asking changes no step.
+/// stops at the first iterate within `accept_below` (scaled violation; by default the
+/// feasibility tolerance) that `accept` takes (asked at the first such iterate, then after 5, 10,
+/// 20, ... more steps); asking changes no step.
 /// With `refusals_to_stop` > 0 it also stops, feasible and not accepted, once `accept` has refused
 /// that many iterates (the caller then refines where the finer measure fails).
 RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::VectorXd& x0,
