@@ -2,7 +2,7 @@
 // least-squares subproblem costs against the numbers of variables, equality rows and inequality
 // rows. The problem: a smooth convex objective (sum of log cosh) over n bounded variables whose
 // unconstrained minimum lies outside dense random linear rows (seeded), so that SLSQP iterates
-// with many rows active, as in the planner's stages. Its functions cost microseconds: the time
+// with some rows active, as in the planner's stages. Its functions cost microseconds: the time
 // is SLSQP's own. Run: ./build/tests/bench/bench_slsqp
 #include <benchmark/benchmark.h>
 #include <nlopt.hpp>
@@ -16,6 +16,7 @@ namespace {
 
 struct Rows {
   Eigen::MatrixXd A_eq, A_in;  ///< one row per constraint
+  Eigen::VectorXd b_in;        ///< inequality bounds
   Eigen::VectorXd target;      ///< the objective's unconstrained minimum
   long evaluations = 0;
 };
@@ -28,6 +29,8 @@ Rows makeRows(int n, int meq, int mineq, unsigned seed) {
   r.A_in = Eigen::MatrixXd::NullaryExpr(mineq, n, [&] { return g(rng); });
   for (int i = 0; i < meq; ++i) r.A_eq.row(i).normalize();
   for (int i = 0; i < mineq; ++i) r.A_in.row(i).normalize();
+  r.b_in = Eigen::VectorXd::Constant(mineq, 5.0);
+  for (int i = 0; i < mineq; i += 20) r.b_in(i) = 0.1;
   r.target = Eigen::VectorXd::NullaryExpr(n, [&] { return 3.0 * g(rng); });
   return r;
 }
@@ -44,21 +47,25 @@ double objective(unsigned n, const double* x, double* grad, void* data) {
   return f;
 }
 
-/// A x (rows of A) with A as the Jacobian; equality rows A x = 0, inequality rows A x <= 0.1
-/// (x = 0 is feasible for both).
-void linearRows(const Eigen::MatrixXd& A, double offset, unsigned m, double* out, unsigned n,
+/// A x - b (rows of A) with A as the Jacobian.
+void linearRows(const Eigen::MatrixXd& A, const Eigen::VectorXd& b, double* out, unsigned n,
                 const double* x, double* grad) {
   const Eigen::Map<const Eigen::VectorXd> xv(x, n);
-  Eigen::Map<Eigen::VectorXd>(out, m) = A * xv - Eigen::VectorXd::Constant(m, offset);
-  if (grad) Eigen::Map<Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(grad, m, n) = A;
+  Eigen::Map<Eigen::VectorXd>(out, A.rows()) = A * xv - b;
+  if (grad) Eigen::Map<Eigen::Matrix<double, -1, -1, Eigen::RowMajor>>(grad, A.rows(), n) = A;
 }
 
-void equalities(unsigned m, double* out, unsigned n, const double* x, double* grad, void* data) {
-  linearRows(static_cast<Rows*>(data)->A_eq, 0.0, m, out, n, x, grad);
+/// Equality rows A x = 0 (x = 0 satisfies them).
+void equalities(unsigned, double* out, unsigned n, const double* x, double* grad, void* data) {
+  const auto& r = *static_cast<Rows*>(data);
+  linearRows(r.A_eq, Eigen::VectorXd::Zero(r.A_eq.rows()), out, n, x, grad);
 }
 
-void inequalities(unsigned m, double* out, unsigned n, const double* x, double* grad, void* data) {
-  linearRows(static_cast<Rows*>(data)->A_in, 0.1, m, out, n, x, grad);
+/// Inequality rows A x <= b: one in twenty tight (b = 0.1), the others far (b = 5), so that, as
+/// in the planner's stages, a small part of them is ever active.
+void inequalities(unsigned, double* out, unsigned n, const double* x, double* grad, void* data) {
+  const auto& r = *static_cast<Rows*>(data);
+  linearRows(r.A_in, r.b_in, out, n, x, grad);
 }
 
 /// Arguments: variables, equality rows, inequality rows. Each benchmark iteration runs SLSQP
@@ -94,9 +101,10 @@ void BM_SlsqpEvaluations(benchmark::State& st) {
       static_cast<double>(evaluations), benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 // The planner's default problem (379 variables, 158 equality rows, 1858 inequality rows), then
-// half the inequality rows, then half the variables.
+// half the equality rows, half the inequality rows, half the variables.
 BENCHMARK(BM_SlsqpEvaluations)
     ->Args({379, 158, 1858})
+    ->Args({379, 79, 1858})
     ->Args({379, 158, 929})
     ->Args({190, 158, 1858})
     ->Unit(benchmark::kMillisecond)
