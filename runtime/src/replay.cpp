@@ -109,8 +109,9 @@ void Replay::enterHold(FaultReason why) {
   out_.fault = why;
   // Freeze the reference: the plan sample of now while executing it (the stabilizer's
   // corrections then ramp out around it, continuously), else the posture being commanded.
-  const bool on_plan =
-      out_.state == State::Running || out_.state == State::Paused || out_.state == State::Finished;
+  const bool on_plan = out_.state == State::Running || out_.state == State::Paused ||
+                       out_.state == State::Finished || ramping_in_;
+  ramping_in_ = false;
   if (on_plan)
     q_hold_ = out_.sample.q;
   else
@@ -169,13 +170,19 @@ const TickOutput& Replay::tick(const core::RobotState* state) {
       }
       break;
     case State::MovingToStart:
-      if (advance > 0.0) ++move_k_;
+      if (advance > 0.0 && !ramping_in_) ++move_k_;
       if (move_k_ >= static_cast<int>(std::ceil(move_T_ * opt_.rate))) {
-        out_.state = State::Running;
-        plan_time_ = 0.0;
-        if (opt_.stabilizer) {
+        // At the plan's first posture the stabilizer ramps in before the plan starts: within
+        // its ramp the plan's first lift-off would get part of the feedback only.
+        if (opt_.stabilizer && !ramping_in_) {
           stab_.reset();
           stab_.enable();
+          ramping_in_ = true;
+        }
+        if (!opt_.stabilizer || stab_.status().mode == stabilizer::Mode::On) {
+          ramping_in_ = false;
+          out_.state = State::Running;
+          plan_time_ = 0.0;
         }
       }
       break;
@@ -198,7 +205,7 @@ const TickOutput& Replay::tick(const core::RobotState* state) {
 
   // The stabilizer acts while the plan is being (or has been) executed, and ramps out in Hold.
   const bool stab_active = opt_.stabilizer && out_.state != State::Idle &&
-                           out_.state != State::MovingToStart && have_state_;
+                           (out_.state != State::MovingToStart || ramping_in_) && have_state_;
   if (stab_active) {
     stab_.setReference(out_.sample.ref);
     track_.estimate(out_.sample, last_state_, meas_);
@@ -223,6 +230,11 @@ void Replay::commandFromReference(bool with_stabilizer, double dt) {
       c.qd_ref = qd_zero_;
       break;
     case State::MovingToStart: {
+      if (ramping_in_) {  // the move is done: the plan's first posture, at rest
+        c.q_ref = s.q;
+        c.qd_ref = qd_zero_;
+        break;
+      }
       // Linear interpolation of the 100 Hz move samples at this tick's time.
       const int last = static_cast<int>(move_.cols()) - 1;
       const double u = std::min(static_cast<double>(move_k_) / opt_.rate, move_T_) / move_T_ *

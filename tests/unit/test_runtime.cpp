@@ -238,16 +238,24 @@ TEST_F(RuntimeTest, LifecycleRunsThePlanToTheEnd) {
   r.start();
   int ticks = 0, moving = 0;
   std::int64_t last_seq = -1;
+  bool first_running = true;
   while (r.state() != State::Finished && ticks < 2000) {
     const auto& out = tickP(r, &st);
     if (out.state == State::MovingToStart) ++moving;
+    if (out.state == State::Running && first_running) {
+      // The plan starts with the stabilizer on in full: it ramped in at the first posture.
+      first_running = false;
+      EXPECT_EQ(out.stab_status.mode, stabilizer::Mode::On);
+      EXPECT_DOUBLE_EQ(out.stab.ramp, 1.0);
+      EXPECT_EQ(out.plan_time, 0.0);
+    }
     ASSERT_TRUE(out.send_command);
     EXPECT_GT(out.command.seq, last_seq);
     last_seq = out.command.seq;
     ++ticks;
   }
   ASSERT_EQ(r.state(), State::Finished) << runtime::toString(r.fault());
-  EXPECT_GE(moving, 19);  // 0.1 s at 200 Hz
+  EXPECT_GE(moving, 19 + 200 * params().ramp_time);  // the 0.1 s move, then the ramp, at 200 Hz
   EXPECT_NEAR(r.output().plan_time, track.duration(), 1e-9);
   // A perfect robot needs no correction: the command is the plan.
   EXPECT_LT((r.output().command.q_ref - track.makeSample().q).norm(), 1e-3);
@@ -315,7 +323,9 @@ TEST_F(RuntimeTest, MoveToStartKeepsTheFeetAndTheLimits) {
   int moving = 0;
   for (int i = 0; i < 2000 && r.state() != State::Running; ++i) {
     const auto& out = tickP(r, &st);
-    if (out.state != State::MovingToStart) continue;
+    // The move itself (then the stabilizer ramps in at the plan's first posture).
+    if (out.state != State::MovingToStart || out.stab_status.mode != stabilizer::Mode::Off)
+      continue;
     ++moving;
     for (int j = 0; j < st.q.size(); ++j)
       max_rate = std::max(
@@ -354,7 +364,7 @@ TEST_F(RuntimeTest, WatchdogHoldsAfterThreeMissedPeriods) {
   runtime::Replay r(track, params(), fastOptions());
   core::RobotState st = perfectState(*plan_, 0);
   r.start();
-  for (int i = 0; i < 60; ++i) tickP(r, &st);
+  for (int i = 0; i < 2000 && r.state() != State::Running; ++i) tickP(r, &st);
   ASSERT_EQ(r.state(), State::Running);
   tickP(r, nullptr);
   tickP(r, nullptr);

@@ -36,8 +36,8 @@ TEST(RuntimeRealTime, TickNeverAllocates) {
   r.prepare();  // plans the move to the start: allocates, outside the tick by design
   const long before = test::allocations();
   for (int i = 0; i < 600; ++i) {
-    if (i == 200) r.pause();
-    if (i == 230) r.resume();
+    if (i == 300) r.pause();  // running: after the 0.1 s move and the stabilizer's 1 s ramp-in
+    if (i == 330) r.resume();
     const core::RobotState* in = &st;
     if (i == 500) in = &bad;                  // fault -> hold
     if (i > 550 && i % 3 == 0) in = nullptr;  // missing states while holding

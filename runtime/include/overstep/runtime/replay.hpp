@@ -75,7 +75,8 @@ class Replay {
   Replay(const PlanTrack& track, const stabilizer::Params& params, const ReplayOptions& options);
 
   /// Requests the start: once a state is known, prepare() plans the move to the plan's first
-  /// posture and the next tick begins it (Idle -> MovingToStart).
+  /// posture and the next tick begins it (Idle -> MovingToStart). With the stabilizer the move
+  /// ends with its ramp-in (ramp_time) at that posture, and the plan starts with it fully on.
   void start();
   /// Work that must not run in the tick (it allocates and uses the model): planning the move to
   /// the start once it is requested and a state is known. Call it between ticks; returns true
@@ -122,6 +123,7 @@ class Replay {
   Eigen::MatrixXd move_;                      ///< joints x samples, planned by prepare()
   bool move_ready_ = false;
   int move_k_ = 0;
+  bool ramping_in_ = false;  ///< the move is done; the stabilizer ramps in at the first posture
   Eigen::VectorXd move_from_, q_hold_, q_prev_, qd_zero_;
   bool prev_valid_ = false;
   stabilizer::Measurement meas_;
