@@ -16,8 +16,11 @@ if [ "${OVERSTEP_SKIP_SANITIZE:-0}" != 1 ]; then
         -DOVERSTEP_WERROR=ON -DOVERSTEP_SANITIZE=ON -DOVERSTEP_BUILD_BENCH=OFF >/dev/null
   cmake --build build-asan -j"$jobs" --target unit_tests  # only what this job runs
   # Problem.EqualityJacobianIsWellConditioned (142 s under ASan, 8 s in Release, where it runs)
-  # makes room for the fuzz targets (label unit, tests/fuzz/README.md); so does
-  # Problem.RestorationStopsWhereAcceptTakesAPoint (75 restoration steps, 13 s in Release).
+  # makes room for the fuzz targets (label unit, tests/fuzz/README.md); so do the restoration
+  # paths of Problem.RestorationStopsWhereAcceptTakesAPoint (75 steps, 13 s in Release) and
+  # Problem.ProjectionEndsAtTheToleranceOnThePolishPath (up to 90 steps, 17 s in Release, 202 s
+  # under ASan).
   ASAN_OPTIONS=detect_leaks=0 ctest --test-dir build-asan -j"$jobs" -L unit \
-    -E '^Problem\.(EqualityJacobianIsWellConditioned|RestorationStopsWhereAcceptTakesAPoint)$' --output-on-failure --timeout 1500
+    -E '^Problem\.(EqualityJacobianIsWellConditioned|RestorationStopsWhereAcceptTakesAPoint|ProjectionEndsAtTheToleranceOnThePolishPath)$' \
+    --output-on-failure --timeout 1500
 fi
