@@ -203,6 +203,9 @@ void registerDemoCommand(CLI::App& app, cli::Registry& registry) {
   sub->add_flag("--allow-invalid-plan", o->allow_invalid,
                 "Replay the planner's best attempt when no plan passes the check");
   sub->add_flag("--no-stabilizer", o->no_stabilizer, "Open-loop replay");
+  sub->add_flag("--sim-contact-log", o->sim_contact_log,
+                "The simulator's ground-truth contact of every 1 ms step to RUN_DIR/"
+                "sim_contacts.csv (overstep sim --contact-log)");
   sub->add_flag("--identify", o->identify,
                 "Close the loop: run, identify the effect (overstep identify), re-plan with the "
                 "identified model, run again; before and after");
@@ -214,7 +217,8 @@ void registerDemoCommand(CLI::App& app, cli::Registry& registry) {
       "  overstep demo --truth truth.yaml               # on a robot with undeclared effects\n"
       "  overstep demo --truth truth.yaml --identify    # ... identify it, re-plan, run again\n"
       "  overstep demo --plan plan.json --truth truth.yaml --identify --seed 2\n"
-      "Writes RUN_DIR/{plan.json, bus.lcmlog, replay.json, sim.json, verdict.json}.\n"
+      "Writes RUN_DIR/{plan.json, bus.lcmlog, replay.json, sim.json, verdict.json} (and\n"
+      "sim_contacts.csv with --sim-contact-log).\n"
       "Exit: 0 cleared, 2 bad input, 3 no valid plan, 4 the robot did not clear the obstacle.");
   registry.add(sub, [o, sub] {
     std::vector<std::string> given;

@@ -181,6 +181,8 @@ json demoRun(const DemoOptions& o, const fs::path& run) {
   // (the last two obstacle arguments).
   sim_argv.insert(sim_argv.end(), obstacle_args.begin(), obstacle_args.end() - 2);
   if (!o.truth.empty()) sim_argv.insert(sim_argv.end(), {"--truth", o.truth});
+  if (o.sim_contact_log)
+    sim_argv.insert(sim_argv.end(), {"--contact-log", (run / "sim_contacts.csv").string()});
   const pid_t sim = spawn(sim_argv, (run / "sim.json").string(), (run / "sim.log").string());
   std::fprintf(stderr, "demo: simulator and runtime running in lockstep on %s; run folder %s\n",
                url.c_str(), run.c_str());

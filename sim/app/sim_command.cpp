@@ -4,10 +4,12 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -43,6 +45,54 @@ struct SimCliOptions {
   bool no_obstacle = false;
   core::ObstacleSpec obstacle;
   std::string obstacle_shape = "box";
+  std::string contact_log;
+};
+
+/// --contact-log: the simulator's ground truth contact after every physics step (1 kHz), as CSV.
+/// Written to FILE.part and renamed over FILE when the run ends, so FILE is never half-written.
+/// Columns: time, then per foot the ground reaction force (world, N) and its centre of pressure
+/// (world x, y on the ground, m; nan without load), then the number of contact points.
+class ContactLog {
+ public:
+  explicit ContactLog(const std::string& path) : path_(path), part_(path + ".part") {
+    if (path_.empty()) return;
+    f_ = std::fopen(part_.c_str(), "w");
+    if (!f_)
+      throw InputError("--contact-log: cannot write " + part_ + " (" + std::strerror(errno) + ")");
+    std::fputs(
+        "t [s],right_Fx [N],right_Fy [N],right_Fz [N],right_cop_x [m],right_cop_y [m],"
+        "left_Fx [N],left_Fy [N],left_Fz [N],left_cop_x [m],left_cop_y [m],contact_points\n",
+        f_);
+  }
+  ContactLog(const ContactLog&) = delete;
+  ContactLog& operator=(const ContactLog&) = delete;
+  ~ContactLog() {
+    if (!f_) return;
+    std::fclose(f_);
+    std::remove(part_.c_str());
+  }
+  void add(double t, const sim::ContactInfo& c) {
+    if (!f_) return;
+    std::fprintf(f_, "%.4f", t);
+    for (const core::Vector6d& w : c.foot_wrench) {  // [torque; force], world, about the origin
+      const double fz = w(5);
+      const double nan = std::nan("");
+      std::fprintf(f_, ",%.3f,%.3f,%.3f,%.5f,%.5f", w(3), w(4), fz, fz > 0.0 ? -w(1) / fz : nan,
+                   fz > 0.0 ? w(0) / fz : nan);
+    }
+    std::fprintf(f_, ",%d\n", c.contact_points);
+  }
+  void finish() {
+    if (!f_) return;
+    const bool ok = std::fclose(f_) == 0;
+    f_ = nullptr;
+    if (!ok || std::rename(part_.c_str(), path_.c_str()) != 0)
+      throw std::runtime_error("--contact-log: could not complete " + path_);
+  }
+
+ private:
+  std::string path_, part_;
+  std::FILE* f_ = nullptr;
 };
 
 class SimProcess {
@@ -54,7 +104,8 @@ class SimProcess {
         noise_(o.seed, o.noise),
         lcm_(o.lcm_url),
         joints_(model.actuatedCount()),
-        model_desc_(model.description()) {
+        model_desc_(model.description()),
+        contact_log_(o.contact_log) {
     cli::lcmOpened(lcm_.good(), o.lcm_url, lcm_said_);
     auto* sub = lcm_.subscribe("OVERSTEP_COMMAND", &SimProcess::onCommandBytes, this);
     sub->setQueueCapacity(1000);  // drain everything; the newest valid command wins
@@ -100,7 +151,10 @@ class SimProcess {
         if (sim_.time() - last_command_sim_ > o_.hold_timeout && !holding_) setHolding(true);
       }
       sim_.setCommand(cmd_.q_ref, cmd_.qd_ref);
-      for (int i = 0; i < steps_per_period_; ++i) sim_.step();
+      for (int i = 0; i < steps_per_period_; ++i) {
+        sim_.step();
+        contact_log_.add(sim_.time(), sim_.contacts());
+      }
       detectFall();
       const auto now = std::chrono::steady_clock::now();
       const double wall = std::chrono::duration<double>(now - rtf_wall).count();
@@ -140,6 +194,7 @@ class SimProcess {
     summary_["base_speed"] = sim_.baseSpeed();
     summary_["obstacle_x"] = {sim_.obstacleRangeX()[0], sim_.obstacleRangeX()[1]};
     summary_["has_obstacle"] = !o_.no_obstacle;
+    contact_log_.finish();
     if (o_.json)
       std::cout << summary_.dump(2) << "\n";
     else
@@ -273,6 +328,7 @@ class SimProcess {
   std::chrono::steady_clock::time_point last_command_wall_ = std::chrono::steady_clock::now();
   nlohmann::json summary_;
   core::RobotDescription model_desc_;
+  ContactLog contact_log_;
 };
 
 int runSim(const SimCliOptions& o) {
@@ -330,12 +386,16 @@ void registerSimCommand(CLI::App& app, cli::Registry& registry) {
   sub->add_option("--margin", o->obstacle.margin, "Extra clearance on every side, m")
       ->default_val(0.0);
   sub->add_flag("--no-obstacle", o->no_obstacle, "No bar in the world");
+  sub->add_option("--contact-log", o->contact_log,
+                  "Write the ground-truth contact of every 1 ms step to this CSV (forces, centres "
+                  "of pressure, contact points; not on the bus)");
   sub->footer(
       "Examples:\n"
       "  overstep sim --realtime                      # HRP-2 stand-in at 200 Hz on the default "
       "bus\n"
       "  overstep sim --lockstep --duration 10 --json # deterministic, driven by the runtime\n"
       "  overstep sim --realtime --truth truth.yaml   # with undeclared effects\n"
+      "  overstep sim --lockstep --contact-log c.csv  # and the contact truth at 1 kHz\n"
       "Channels: subscribes OVERSTEP_COMMAND; publishes OVERSTEP_STATE, OVERSTEP_SIM_STATUS.\n"
       "Stops on Ctrl-C / SIGTERM (exit 0) or after --duration.");
   registry.add(sub, [o] { return runSim(*o); });

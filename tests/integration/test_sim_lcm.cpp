@@ -7,9 +7,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <future>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <vector>
 
 #include "overstep/robot_command_t.hpp"
@@ -183,9 +186,45 @@ TEST(SimCli, BadInputGivesExit2WithOneLine) {
   for (const char* args :
        {"sim", "sim --lockstep --realtime", "sim --lockstep --rate 333",
         "sim --lockstep --noise -1", "sim --lockstep --truth /nonexistent.yaml",
-        "sim --lockstep --obstacle-height -1", "sim --lockstep --obstacle-shape pyramid"}) {
+        "sim --lockstep --obstacle-height -1", "sim --lockstep --obstacle-shape pyramid",
+        "sim --realtime --duration 0.1 --lcm-url memq:// --contact-log /nonexistent/dir/c.csv"}) {
     const auto r = overstep::test::runOverstep(args);
     EXPECT_EQ(r.code, 2) << args;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;
   }
+}
+
+// --contact-log: one row per 1 ms step with both feet's ground reaction; standing still in
+// half-sitting, the normal forces carry the robot's weight at every step, each foot's centre of
+// pressure on its own side, and nothing is left under the temporary name.
+TEST(SimCli, ContactLogCarriesTheWeightAtEveryStep) {
+  overstep::test::TempDir dir;
+  const std::string csv = dir.file("contacts.csv");
+  const auto r = overstep::test::runOverstep(
+      "sim --realtime --duration 0.2 --noise 0 --no-obstacle --lcm-url memq:// --contact-log " +
+      csv);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(csv + ".part"));
+  const auto model = overstep::test::runOverstep("model --json");
+  ASSERT_EQ(model.code, 0) << model.err;
+  const double weight = nlohmann::json::parse(model.out)["mass"].get<double>() * 9.81;
+  std::ifstream in(csv);
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  EXPECT_EQ(line.rfind("t [s],right_Fx [N],", 0), 0u) << line;
+  EXPECT_EQ(std::count(line.begin(), line.end(), ','), 11) << line;
+  int rows = 0;
+  while (std::getline(in, line)) {
+    std::vector<double> v;
+    std::stringstream ss(line);
+    std::string cell;
+    while (std::getline(ss, cell, ',')) v.push_back(std::stod(cell));
+    ASSERT_EQ(v.size(), 12u) << line;
+    EXPECT_NEAR(v[3] + v[8], weight, 0.01 * weight) << line;
+    EXPECT_LT(v[5], -0.05) << "right foot's centre of pressure: " << line;
+    EXPECT_GT(v[10], 0.05) << "left foot's centre of pressure: " << line;
+    EXPECT_GE(v[11], 6) << line;
+    ++rows;
+  }
+  EXPECT_EQ(rows, 200);
 }

@@ -24,6 +24,7 @@ struct DemoOptions {
   std::string shape = "box";
   bool replan = false, allow_invalid = false, no_stabilizer = false, json = false;
   bool no_report = false, identify = false;
+  bool sim_contact_log = false;  ///< the simulator writes RUN_DIR/sim_contacts.csv
   unsigned seed = 1;             ///< the simulator's sensor-noise seed
   double timeout = 120.0;        ///< s of wall time for the run (after planning)
   double plan_time_limit = 0.0;  ///< s, passed to overstep plan (0: its configuration's)
