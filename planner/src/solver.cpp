@@ -290,7 +290,15 @@ constexpr int kStepTries = 14;
 /// between it and the last stage that ended feasible, from that stage's solution; at most this
 /// many such stages per solve.
 constexpr int kMaxBisections = 3;
-constexpr int kPolishRefusals = 3;  // the check's refusals that end the target stage's polish
+constexpr int kPolishRefusals = 3;
+constexpr int kGuessSteps = 60;  // the kinematic guess's restoration
+/// A guess restoration that ends above this violation (scaled; there the stall rule has not
+/// started: kStallBelow) is run again from the guess with its first damping this many times
+/// larger. Over 41 bars within 1 cm of the default the first run ended at 0.06-1.11 but twice
+/// at 2.9 (docs/history/planner.md).
+constexpr double kGuessRestartAbove = kStallBelow;
+constexpr double kGuessRestartDamping =
+    10.0;  // the check's refusals that end the target stage's polish
 
 }  // namespace
 
@@ -299,7 +307,7 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
                                      const std::function<void(const IterationInfo&)>& on_iter,
                                      double time_limit_s, const AcceptFn& accept,
                                      double accept_below, int refusals_to_stop,
-                                     RestorationGoal goal) {
+                                     RestorationGoal goal, double damping) {
   // Projected Levenberg-Marquardt on the violation residuals r = [max(0, g); h] (rows near
   // activity keep their Jacobians so the step does not break them). NLopt offers no
   // least-squares method; SLSQP started far from feasibility stalls (measured: docs/planner.md).
@@ -323,7 +331,7 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
     return 0.5 * (ev.ineq.cwiseMax(0.0).squaredNorm() + ev.eq.squaredNorm());
   };
   double cost = residual(e, nullptr, nullptr);
-  double lambda = 1e-3;
+  double lambda = damping;
   Eigen::VectorXd grad;
   Eigen::MatrixXd jin, jeq;
   int next_ask = 0, gap = 5;  // when `accept` is asked next (a step count), and then how often
@@ -454,11 +462,12 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     return result;
   };
   auto restore = [&](const Eigen::VectorXd& from, int iterations, const AcceptFn& take = {},
-                     int refusals_to_stop = 0, RestorationGoal goal = RestorationGoal::Polish) {
+                     int refusals_to_stop = 0, RestorationGoal goal = RestorationGoal::Polish,
+                     double damping = kRestorationDamping) {
     return accounted(out.split.restoration, [&] {
       return restoreFeasibility(problem, from, iterations, stop, on_restore,
                                 time_limit_s - elapsed(), take, kFeasibilityTolerance,
-                                refusals_to_stop, goal);
+                                refusals_to_stop, goal, damping);
     });
   };
   // The result is x itself (no stage solve ended the plan).
@@ -507,11 +516,22 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     }
   } else {
     problem.setDifficulty(stages.front().first, stages.front().second, stages.size() == 1);
-    x = problem.initialGuess();
+    const Eigen::VectorXd guess = problem.initialGuess();
     if (on_stage) on_stage("restoring feasibility of the kinematic guess (Levenberg-Marquardt)");
-    const RestorationResult rest = restore(x, 60, {}, 0, RestorationGoal::Project);
-    x = rest.x;
+    RestorationResult rest = restore(guess, kGuessSteps, {}, 0, RestorationGoal::Project);
     out.iterations += rest.iterations;
+    if (rest.max_violation > kGuessRestartAbove && !rest.interrupted && !rest.timed_out) {
+      // Stuck far from the feasible set: the first, nearly Gauss-Newton steps from the guess's
+      // large CoP violations can drag the swinging foot through the bar, where the violations'
+      // sum of squares has a local minimum (the foot low across the bar, ~2.9; 20 cm x 11 cm bar
+      // 1 mm lower or 4 mm farther). Shorter first steps from the guess avoid it there.
+      if (on_stage) on_stage("stuck far from feasibility: restoring the guess again, damped");
+      const RestorationResult again = restore(guess, kGuessSteps, {}, 0, RestorationGoal::Project,
+                                              kGuessRestartDamping * kRestorationDamping);
+      out.iterations += again.iterations;
+      if (again.max_violation < rest.max_violation) rest = again;
+    }
+    x = rest.x;
   }
   // The last stage that ended feasible (its parameters and solution): where a failed stage's
   // bisection starts.

@@ -73,6 +73,8 @@ struct PlanOutcome {
 /// 50 um of CoP beyond its box, 0.05 N m of ankle imbalance, 0.5 mm of clearance, 1e-3 rad at a
 /// switch. `overstep check` re-verifies the plan with physical tolerances on a 1 kHz grid.
 inline constexpr double kFeasibilityTolerance = 1e-2;
+/// The restoration's first Levenberg-Marquardt damping (restoreFeasibility).
+inline constexpr double kRestorationDamping = 1e-3;
 
 struct RestorationResult {
   Eigen::VectorXd x;
@@ -103,14 +105,14 @@ enum class RestorationGoal { Polish, Project };
 /// 20, ... more steps); asking changes no step.
 /// With `refusals_to_stop` > 0 it also stops, feasible and not accepted, once `accept` has refused
 /// that many iterates (the caller then refines where the finer measure fails).
-RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::VectorXd& x0,
-                                     int max_iterations, const std::atomic<bool>* stop,
-                                     const std::function<void(const IterationInfo&)>& on_iter,
-                                     double time_limit_s = std::numeric_limits<double>::infinity(),
-                                     const AcceptFn& accept = {},
-                                     double accept_below = kFeasibilityTolerance,
-                                     int refusals_to_stop = 0,
-                                     RestorationGoal goal = RestorationGoal::Polish);
+/// `damping`: the Levenberg-Marquardt damping of the first step, relative to diag(J^T J); each
+/// accepted step divides it by 3, each rejected trial multiplies it by 5.
+RestorationResult restoreFeasibility(
+    OverstepProblem& problem, const Eigen::VectorXd& x0, int max_iterations,
+    const std::atomic<bool>* stop, const std::function<void(const IterationInfo&)>& on_iter,
+    double time_limit_s = std::numeric_limits<double>::infinity(), const AcceptFn& accept = {},
+    double accept_below = kFeasibilityTolerance, int refusals_to_stop = 0,
+    RestorationGoal goal = RestorationGoal::Polish, double damping = kRestorationDamping);
 
 /// Runs the homotopy from the kinematic guess (after a feasibility restoration) to the target
 /// obstacle and CoP box; with `warm_start` (a solution vector of this problem's layout, e.g. a
