@@ -114,7 +114,8 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
         const auto& d = model.description();
         robots::Vector6d prev;
         for (int j = 0; j < 6; ++j) prev(j) = q(m.leg_coord[static_cast<std::size_t>(6 * f + j)]);
-        const robots::LegIkResult ik = m.legToSole(model, f, target, q, prev);
+        const robots::LegIkResult ik =
+            m.legToSole(model, f, target, q, prev, robots::BeyondReach::Stretch);
         for (int j = 0; j < 6; ++j) {
           const auto& aj =
               d.actuated[static_cast<std::size_t>(m.leg_act[static_cast<std::size_t>(6 * f + j)])];

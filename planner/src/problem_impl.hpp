@@ -99,6 +99,20 @@ struct OverstepProblem::Impl : ProblemModel {
     {
       robots::WholeBodyModel tmp(model_template);
       q_rest = tmp.halfSitting();
+      // Each leg stretched (its ankle asked 1 m below its zero posture): the reach row's value
+      // where the double-support leg's target lies beyond reach (solveOtherLeg).
+      Eigen::VectorXd q = q_rest;
+      for (int f = 0; f < 2; ++f) {
+        Eigen::Isometry3d X_BA = leg_ik[f]->forward(robots::Vector6d::Zero());
+        X_BA.translation().z() -= 1.0;
+        const robots::LegIkResult ik = leg_ik[f]->solve(X_BA);
+        for (int j = 0; j < 6; ++j) q(leg_coord[static_cast<std::size_t>(6 * f + j)]) = ik.q(j);
+      }
+      tmp.setPositions(q);
+      for (int f = 0; f < 2; ++f)
+        stretched_reach[f] = (tmp.framePose(ankle_frame[f]).translation() -
+                              tmp.framePose(hip_frame[f]).translation())
+                                 .norm();
     }
     height = obstacle.height;
     cop_box = cfg.cop_box;
@@ -329,13 +343,14 @@ struct OverstepProblem::Impl : ProblemModel {
   /// ankle-roll branch. Exact wherever the target is within reach; the angles are not clamped
   /// (the joint-limit rows see them).
   robots::LegIkResult legToSole(robots::WholeBodyModel& m, int leg, const Eigen::Isometry3d& X_WS,
-                                const Eigen::VectorXd& q, const robots::Vector6d& reference) const {
+                                const Eigen::VectorXd& q, const robots::Vector6d& reference,
+                                robots::BeyondReach beyond = robots::BeyondReach::Continue) const {
     m.setPositions(q);
     const Eigen::Isometry3d X_WB = m.framePose(base_frame);
     // Ankle link to sole: the bushing's deflection and the foot's geometry (no leg joint in it).
     const Eigen::Isometry3d X_AS =
         m.framePose(ankle_link_frame[leg]).inverse() * m.framePose(sole_frame[leg]);
-    return leg_ik[leg]->solve(X_WB.inverse() * X_WS * X_AS.inverse(), &reference);
+    return leg_ik[leg]->solve(X_WB.inverse() * X_WS * X_AS.inverse(), &reference, beyond);
   }
 
   void solveOtherLeg(Workspace& w, int leg, const Eigen::Isometry3d& target) const {
@@ -373,9 +388,15 @@ struct OverstepProblem::Impl : ProblemModel {
     const Eigen::Matrix<double, 6, 1> da = -solve6(m.frameAcceleration(f));
     for (int j = 0; j < 6; ++j) st.a(cols[j]) = da(j);
     m.setAccelerations(st.a);
-    st.reach =
-        (m.framePose(ankle_frame[leg]).translation() - m.framePose(hip_frame[leg]).translation())
-            .norm();
+    // Beyond reach the knee is continued past straight (robots::BeyondReach::Continue) and the
+    // achieved distance shrinks again: the stretched leg's distance plus the target's excess
+    // keeps the row growing with it (without it, the reach row and the knee's joint-limit row
+    // held constant there: a restoration stalled at the knee's 0.524 with no gradient).
+    const double excess = ik.hip_ankle - leg_ik[leg]->maxReach();
+    st.reach = excess > 0.0 ? stretched_reach[leg] + excess
+                            : (m.framePose(ankle_frame[leg]).translation() -
+                               m.framePose(hip_frame[leg]).translation())
+                                  .norm();
   }
 
   /// The state (q, v, a) as given, with everything buildState() derives from it: torques, the

@@ -133,9 +133,10 @@ struct ProblemModel {
   std::array<int, 12> leg_act{};    // actuated indices
   std::array<int, 4> flex_coord{};  // RLEG roll, pitch, LLEG roll, pitch
   int sole_frame[2]{};
-  int hip_frame[2]{};         // hip pitch link origin per leg (reach)
-  int ankle_frame[2]{};       // ankle pitch link origin per leg (reach)
-  int ankle_link_frame[2]{};  // child link of the ankle roll joint (above the bushing)
+  int hip_frame[2]{};           // hip pitch link origin per leg (reach)
+  int ankle_frame[2]{};         // ankle pitch link origin per leg (reach)
+  double stretched_reach[2]{};  // hip-ankle frame distance of the stretched leg, m
+  int ankle_link_frame[2]{};    // child link of the ankle roll joint (above the bushing)
   std::unique_ptr<robots::LegIk> leg_ik[2];  // closed-form leg solutions (immutable, shared)
   std::array<std::string, 3> leg_links[2];   // thigh, shank and foot bodies per leg
   int head_frame = -1;

@@ -139,7 +139,8 @@ LegIk::LegIk(const WholeBodyModel& model_in, const LegChain& chain) {
   }
 }
 
-LegIkResult LegIk::solve(const Eigen::Isometry3d& X_BA, const Vector6d* reference) const {
+LegIkResult LegIk::solve(const Eigen::Isometry3d& X_BA, const Vector6d* reference,
+                         BeyondReach beyond) const {
   // Two ankle-roll branches: both solved, the one inside the joint limits and nearer the
   // reference posture kept (with a deeply folded knee both can lie inside the limits).
   const Vector6d& ref = reference ? *reference : reference_;
@@ -154,7 +155,7 @@ LegIkResult LegIk::solve(const Eigen::Isometry3d& X_BA, const Vector6d* referenc
   LegIkResult best;
   double best_score = std::numeric_limits<double>::infinity();
   for (const double q5 : {wrap(-alpha + a5), wrap(-alpha - a5)}) {
-    LegIkResult out = solveGivenRoll(R, r5, q5);
+    LegIkResult out = solveGivenRoll(R, r5, q5, beyond);
     out.reachable = out.reachable && std::abs(c5) <= 1.0;
     out.hip_ankle = r.norm();
     double score = 0.0;
@@ -170,8 +171,8 @@ LegIkResult LegIk::solve(const Eigen::Isometry3d& X_BA, const Vector6d* referenc
   return best;
 }
 
-LegIkResult LegIk::solveGivenRoll(const Eigen::Matrix3d& R, const Eigen::Vector3d& r5,
-                                  double q5) const {
+LegIkResult LegIk::solveGivenRoll(const Eigen::Matrix3d& R, const Eigen::Vector3d& r5, double q5,
+                                  BeyondReach beyond) const {
   LegIkResult out;
   const Eigen::Vector3d r4 = rotX(q5) * r5;
   // Knee: |t + Ry(q3) s| (x-z plane) = |r4| (x-z plane).
@@ -181,12 +182,12 @@ LegIkResult LegIk::solveGivenRoll(const Eigen::Matrix3d& R, const Eigen::Vector3
   const double D2 = r4.x() * r4.x() + r4.z() * r4.z();
   const double t2 = thigh_.x() * thigh_.x() + thigh_.z() * thigh_.z();
   const double s2 = shank_.x() * shank_.x() + shank_.z() * shank_.z();
-  double ck = rho > 1e-12 ? 0.5 * (D2 - t2 - s2) / rho : 1.0;
-  if (std::abs(ck) > 1.0) {
-    out.reachable = false;
-    ck = std::clamp(ck, -1.0, 1.0);
-  }
-  const double q3 = wrap(std::atan2(B, A) + knee_side_ * std::acos(ck));
+  const double ck = rho > 1e-12 ? 0.5 * (D2 - t2 - s2) / rho : 1.0;
+  out.reachable = std::abs(ck) <= 1.0;
+  const double bend = ck > 1.0 && beyond == BeyondReach::Continue
+                          ? -std::sqrt(2.0 * (ck - 1.0))
+                          : std::acos(std::clamp(ck, -1.0, 1.0));
+  const double q3 = wrap(std::atan2(B, A) + knee_side_ * bend);
   // Ankle pitch: r4 = Ry(-q4) v, v = Ry(-q3) t + s; psi(p) = atan2(p_x, p_z) grows with Ry.
   const Eigen::Vector3d v = rotY(-q3) * thigh_ + shank_;
   const double q4 = wrap(std::atan2(v.x(), v.z()) - std::atan2(r4.x(), r4.z()));

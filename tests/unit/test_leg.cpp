@@ -148,6 +148,42 @@ TEST_F(Legs, BeyondReachPointsTheStretchedLegAtTheTarget) {
   EXPECT_GT(A.normalized().dot(want.normalized()), 0.99);
 }
 
+// The planner's continuation beyond reach: within reach the same angles as the pose solve; past
+// it the knee bends the other way, from straight at the boundary, further the further the target,
+// every angle finite (a constant knee there gave an optimiser's joint-limit row no gradient).
+TEST_F(Legs, ContinuationBeyondReachBendsTheKneePastStraight) {
+  for (const LegChain& c : legChains(*model_)) {
+    const LegIk ik(*model_, c);
+    const Eigen::Vector3d dir = Eigen::Vector3d(0.1, 0.0, -1.0).normalized();
+    // The ankle link placed so that its ankle centre lies `dist` from the hip centre along dir.
+    auto target = [&](double dist) {
+      Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+      X.translation() = ik.hipCentre() + dist * dir - ik.ankleCentre();
+      return X;
+    };
+    const double R = ik.maxReach();
+    for (const double dist : {R - 0.05, R - 0.01}) {
+      const LegIkResult pose = ik.solve(target(dist));
+      const LegIkResult cont = ik.solve(target(dist), nullptr, BeyondReach::Continue);
+      ASSERT_TRUE(pose.reachable) << c.side << " " << dist;
+      EXPECT_EQ((pose.q - cont.q).cwiseAbs().maxCoeff(), 0.0) << c.side << " " << dist;
+    }
+    double last_knee = 0.0;
+    for (const double excess : {1e-9, 1e-4, 1e-3, 1e-2, 5e-2}) {
+      const LegIkResult pose = ik.solve(target(R + excess));
+      const LegIkResult cont = ik.solve(target(R + excess), nullptr, BeyondReach::Continue);
+      EXPECT_FALSE(cont.reachable) << c.side << " " << excess;
+      EXPECT_TRUE(cont.q.allFinite()) << c.side << " " << excess;
+      EXPECT_NEAR(pose.q(3), 0.0, 1e-9) << c.side << " " << excess;
+      EXPECT_LT(cont.q(3), last_knee) << c.side << " " << excess;
+      if (excess == 1e-9) {
+        EXPECT_GT(cont.q(3), -1e-3) << c.side;  // continuous at the boundary
+      }
+      last_knee = cont.q(3);
+    }
+  }
+}
+
 TEST(LegShape, AnkleAxesThatDoNotMeetAreRefused) {
   test::TempDir dir;
   // Move the right ankle roll 1 cm below the ankle pitch: no closed form any more.

@@ -55,6 +55,17 @@ struct LegIkResult {
   double hip_ankle = 0.0;  ///< m, distance from the hip centre H to the ankle centre A
 };
 
+/// What LegIk::solve returns for an ankle beyond the stretched leg's reach.
+enum class BeyondReach {
+  /// The knee straight, the leg pointing at the target: the nearest pose (the runtime's).
+  Stretch,
+  /// The knee past straight by sqrt(2 (c - 1)), c > 1 the knee's cosine the target asks for
+  /// (the continuation of acos(c) ~ sqrt(2 (1 - c)) below 1): not a pose, but every angle keeps
+  /// changing with the target, so that an optimiser's joint-limit rows still see how far beyond
+  /// reach it lies (the planner's).
+  Continue,
+};
+
 /// Closed-form inverse kinematics of one leg (see the file comment). Immutable after
 /// construction; safe to share between threads.
 class LegIk {
@@ -66,7 +77,8 @@ class LegIk {
   /// Joint angles that put the ankle link at X_BA (its pose in the base frame); `reference`
   /// (chain order, rad) chooses between the ankle-roll branches, half-sitting if null. Never
   /// throws.
-  LegIkResult solve(const Eigen::Isometry3d& X_BA, const Vector6d* reference = nullptr) const;
+  LegIkResult solve(const Eigen::Isometry3d& X_BA, const Vector6d* reference = nullptr,
+                    BeyondReach beyond = BeyondReach::Stretch) const;
 
   /// Forward kinematics of the same geometry: the ankle link's pose in the base frame.
   Eigen::Isometry3d forward(const Vector6d& q) const;
@@ -89,7 +101,8 @@ class LegIk {
   Eigen::Vector3d p_AC_;           // ankle centre in the ankle-link frame
   Eigen::Matrix3d R_BA0_;          // ankle-link orientation at the zero posture
   Eigen::Vector3d thigh_, shank_;  // H -> knee axis point, knee -> A, at the zero posture
-  LegIkResult solveGivenRoll(const Eigen::Matrix3d& R, const Eigen::Vector3d& r5, double q5) const;
+  LegIkResult solveGivenRoll(const Eigen::Matrix3d& R, const Eigen::Vector3d& r5, double q5,
+                             BeyondReach beyond) const;
 
   double knee_side_ = 1.0;              // sign of the knee angle on the half-sitting branch
   Vector6d lower_, upper_, reference_;  // mechanical limits and half-sitting, rad
