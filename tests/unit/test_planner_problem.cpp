@@ -114,6 +114,33 @@ TEST_F(Problem, RestorationDampingShortensTheFirstStep) {
   EXPECT_LT(length[1], length[0]);
 }
 
+// Beyond reach the double-support leg's reach rows keep growing with its target (the leg
+// continued past straight, the row the stretched leg's distance plus the target's excess; before,
+// both stopped at the stretched leg and a restoration held there without a gradient): the right
+// landing 30 cm further forward stretches the left leg in the transfer; 1 cm further still,
+// every reach row more than 5 cm beyond leg_reach grows, by up to that centimetre.
+TEST_F(Problem, ReachRowsGrowBeyondReach) {
+  OverstepProblem& p = *raw_;
+  const std::vector<Family>& fam = p.inequalityFamilies();
+  Eigen::VectorXd x = restored();
+  const int landing_x = p.layout().feet + 2;  // the right foot's landing placement, x
+  Evaluation near, far;
+  x(landing_x) += 0.30;
+  p.evaluate(x, near);
+  x(landing_x) += 0.01;
+  p.evaluate(x, far);
+  int beyond = 0;
+  for (int i = 0; i < near.ineq.size(); ++i) {
+    if (fam[static_cast<std::size_t>(i)] != Family::Reach || !(near.ineq(i) > 1.0)) continue;
+    ++beyond;
+    EXPECT_TRUE(std::isfinite(far.ineq(i))) << p.describeRow(x, false, i);
+    EXPECT_GT(far.ineq(i) - near.ineq(i), 0.05) << p.describeRow(x, false, i);  // 2.5 mm
+    EXPECT_LT(far.ineq(i) - near.ineq(i), 0.2 + 1e-9) << p.describeRow(x, false, i);
+  }
+  // Fails too where the rows stop at the stretched leg (~0.12), as they did before.
+  EXPECT_GT(beyond, 0) << "no reach row 5 cm beyond leg_reach";
+}
+
 // The restoration's `accept` (the plan command passes the 1 kHz check): asked only at iterates
 // within its violation level (here 0.5, which the guess's restoration reaches in a few steps; the
 // planner uses the feasibility tolerance), then after 5, 10, ... more steps; an iterate it
