@@ -290,15 +290,14 @@ constexpr int kStepTries = 14;
 /// between it and the last stage that ended feasible, from that stage's solution; at most this
 /// many such stages per solve.
 constexpr int kMaxBisections = 3;
-constexpr int kPolishRefusals = 3;
-constexpr int kGuessSteps = 60;  // the kinematic guess's restoration
-/// A guess restoration that ends above this violation (scaled; there the stall rule has not
-/// started: kStallBelow) is run again from the guess with its first damping this many times
-/// larger. Over 41 bars within 1 cm of the default the first run ended at 0.06-1.11 but twice
-/// at 2.9 (docs/history/planner.md).
+constexpr int kPolishRefusals = 3;  // the check's refusals that end the target stage's polish
+constexpr int kGuessSteps = 60;     // the kinematic guess's restoration
+/// A guess restoration that ends above this violation (scaled) is run again from the guess with
+/// its first damping this many times larger; the first run also ends once it crawls there
+/// (RestorationGoal::Probe). Over 41 bars within 1 cm of the default the first run ended at
+/// 0.06-1.11 but twice at 2.9 (docs/history/planner.md).
 constexpr double kGuessRestartAbove = kStallBelow;
-constexpr double kGuessRestartDamping =
-    10.0;  // the check's refusals that end the target stage's polish
+constexpr double kGuessRestartDamping = 10.0;
 
 }  // namespace
 
@@ -345,9 +344,11 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
   // of 40 steps crawling, e.g. 0.026 -> 0.024; ending there took the plan from 64 s to 59 s).
   std::array<double, kStallSteps> history;
   history.fill(std::numeric_limits<double>::infinity());
-  const bool project = goal == RestorationGoal::Project;
+  const bool project = goal != RestorationGoal::Polish;
   const double done_below = project ? kFeasibilityTolerance : 0.1 * kFeasibilityTolerance;
   const double stall_above = project ? kFeasibilityTolerance : kStallAbove;
+  const double stall_below =
+      goal == RestorationGoal::Probe ? std::numeric_limits<double>::infinity() : kStallBelow;
   for (int it = 0; it < max_iterations; ++it) {
     const double viol = NloptSolver::maxViolation(e);
     if (viol <= done_below) break;
@@ -428,7 +429,7 @@ RestorationResult restoreFeasibility(OverstepProblem& problem, const Eigen::Vect
     if (!accepted) break;
     const double now = NloptSolver::maxViolation(e);
     double& oldest = history[static_cast<std::size_t>(it % kStallSteps)];
-    if (now > stall_above && now < kStallBelow && now > (1.0 - kStallDecrease) * oldest) break;
+    if (now > stall_above && now < stall_below && now > (1.0 - kStallDecrease) * oldest) break;
     oldest = now;
   }
   out.x = x;
@@ -518,7 +519,7 @@ PlanOutcome planOverstep(OverstepProblem& problem, NlpSolver& solver, double tim
     problem.setDifficulty(stages.front().first, stages.front().second, stages.size() == 1);
     const Eigen::VectorXd guess = problem.initialGuess();
     if (on_stage) on_stage("restoring feasibility of the kinematic guess (Levenberg-Marquardt)");
-    RestorationResult rest = restore(guess, kGuessSteps, {}, 0, RestorationGoal::Project);
+    RestorationResult rest = restore(guess, kGuessSteps, {}, 0, RestorationGoal::Probe);
     out.iterations += rest.iterations;
     if (rest.max_violation > kGuessRestartAbove && !rest.interrupted && !rest.timed_out) {
       // Stuck far from the feasible set: the first, nearly Gauss-Newton steps from the guess's

@@ -195,6 +195,43 @@ TEST_F(Problem, RestorationStopsWhereAcceptTakesAPoint) {
   EXPECT_LT(stopped.iterations, plain.iterations);
 }
 
+// A probe (the planner's first restoration of its guess, which a damped second start may follow)
+// takes the projection's steps, bit for bit, and also ends once ten steps took less than 1 % off
+// a violation above 1, where the projection goes on: from the guess for a 40 cm bar, which no
+// swing clears.
+TEST_F(Problem, ProbeEndsOnAStallFarFromFeasibility) {
+  core::ObstacleSpec ob;
+  ob.height = 0.4;
+  PlannerConfig off;
+  off.passive_polish = false;
+  off.swept_clearance = 0.0;
+  OverstepProblem p(*model_, off, ob);
+  const Eigen::VectorXd x0 = p.initialGuess();
+  constexpr int kSteps = 30;
+  const auto inf = std::numeric_limits<double>::infinity();
+  std::vector<double> viol;  // after each projection step
+  const auto record = [&](const IterationInfo& i) { viol.push_back(i.max_violation); };
+  const RestorationResult project = restoreFeasibility(
+      p, x0, kSteps, nullptr, record, inf, {}, kFeasibilityTolerance, 0, RestorationGoal::Project);
+  const RestorationResult probe = restoreFeasibility(
+      p, x0, kSteps, nullptr, nullptr, inf, {}, kFeasibilityTolerance, 0, RestorationGoal::Probe);
+  ASSERT_EQ(static_cast<int>(viol.size()), project.iterations);
+  // The projection's first step that took less than 1 % off the violation ten steps before it,
+  // above 1 (below 1 the projection itself stops there).
+  int expected = project.iterations;
+  for (int k = 11; k <= project.iterations; ++k) {
+    const double v = viol[static_cast<std::size_t>(k - 1)];
+    if (v > 0.99 * viol[static_cast<std::size_t>(k - 11)]) {
+      expected = k;
+      break;
+    }
+  }
+  ASSERT_LT(expected, project.iterations) << "the projection did not crawl: no stall to probe";
+  ASSERT_GT(viol[static_cast<std::size_t>(expected - 1)], 1.0);
+  EXPECT_EQ(probe.iterations, expected);
+  EXPECT_EQ(probe.max_violation, viol[static_cast<std::size_t>(expected - 1)]);
+}
+
 // A projection (the start of a stage solve) takes the polish's steps, bit for bit, and ends at
 // the first iterate within the feasibility tolerance, or once ten steps took less than 1 % off
 // a violation above it; the polish goes on toward a tenth of the tolerance.

@@ -93,12 +93,15 @@ using AcceptFn = std::function<bool(const Eigen::VectorXd&)>;
 /// What a restoration is for. Polish: a feasible point to end a stage at; it aims at a tenth of
 /// kFeasibilityTolerance and gives up only far from it. Project: the start of a stage solve, which
 /// SLSQP takes from any point near the feasible set; it ends at the tolerance, or once it crawls.
-enum class RestorationGoal { Polish, Project };
+/// Probe: a Project that also ends once it crawls far from the feasible set (above 1, scaled),
+/// for a caller with another start to try (the planner's guess).
+enum class RestorationGoal { Polish, Project, Probe };
 
 /// Drives x toward feasibility (least squares on the violations, bounds respected). Stops after
 /// `max_iterations` steps, on `stop`, once `time_limit_s` of wall time has passed (checked
 /// before each step; <= 0: no step at all), or when, with its largest violation above ten times
-/// the tolerance (Project: above the tolerance), ten steps took less than 1 % off it. Without
+/// the tolerance (Project: above the tolerance) and below 1 (Probe: anywhere above the
+/// tolerance), ten steps took less than 1 % off it. Without
 /// `accept` it aims at a tenth of kFeasibilityTolerance (Project: the tolerance); with it, it also
 /// stops at the first iterate within `accept_below` (scaled violation; by default the
 /// feasibility tolerance) that `accept` takes (asked at the first such iterate, then after 5, 10,
