@@ -27,12 +27,15 @@ class Problem : public ::testing::Test {
     core::ObstacleSpec ob;
     ob.height = 0.05;
     problem_ = new OverstepProblem(*model_, PlannerConfig{}, ob);
-    // The problem without the polish and the swept clearance (for the restorations below).
+    raw_ = new OverstepProblem(*model_, rawConfig(), ob);
+    x_ = new Eigen::VectorXd(problem_->initialGuess());
+  }
+  /// The configuration without the polish and the swept clearance (for the restorations below).
+  static PlannerConfig rawConfig() {
     PlannerConfig off;
     off.passive_polish = false;
     off.swept_clearance = 0.0;
-    raw_ = new OverstepProblem(*model_, off, ob);
-    x_ = new Eigen::VectorXd(problem_->initialGuess());
+    return off;
   }
   static void TearDownTestSuite() {
     delete x_;
@@ -202,10 +205,7 @@ TEST_F(Problem, RestorationStopsWhereAcceptTakesAPoint) {
 TEST_F(Problem, ProbeEndsOnAStallFarFromFeasibility) {
   core::ObstacleSpec ob;
   ob.height = 0.4;
-  PlannerConfig off;
-  off.passive_polish = false;
-  off.swept_clearance = 0.0;
-  OverstepProblem p(*model_, off, ob);
+  OverstepProblem p(*model_, rawConfig(), ob);
   const Eigen::VectorXd x0 = p.initialGuess();
   constexpr int kSteps = 30;
   const auto inf = std::numeric_limits<double>::infinity();
@@ -676,10 +676,7 @@ double elasticResidual(const core::Plan& p, bool single_support_only = false) {
 TEST_F(Problem, PassivePolishChangesOnlySingleSupportAndKeepsTheLiftOffs) {
   core::ObstacleSpec ob;
   ob.height = 0.05;
-  PlannerConfig off;
-  off.passive_polish = false;
-  off.swept_clearance = 0.0;
-  OverstepProblem raw(*model_, off, ob);
+  OverstepProblem raw(*model_, rawConfig(), ob);
   // The guess is far from dynamics (~100 N m): a nearly feasible point at the samples, where the
   // linearised correction applies, with the bushing curves' control points zig-zagging by
   // +-0.5 mrad inside each single support (what unconverged solutions showed: bushing curves
