@@ -267,30 +267,46 @@ struct OverstepProblem::Impl : ProblemModel {
     return footPlacement(phase, 1 - anchor_of[phase], w);
   }
 
+  /// The splines' values at time t: rows the 12 leg joints (legs_c's order) then the 4 bushing
+  /// coordinates (flex_c's), columns the value, first and second time derivative (rad, rad/s,
+  /// rad/s^2). What a sample's state depends on besides its phase, its time and the placements.
+  using SplineState = Eigen::Matrix<double, 16, 3>;
+  SplineState splineState(const Workspace& w, double t) const {
+    SplineState S;
+    const PhaseSpline::Basis b = w.spline->evaluate(t);
+    const PhaseSpline::Basis bf = w.flex_spline->evaluate(t);
+    const auto legs = w.legs_c.middleCols(b.first, static_cast<int>(b.value.size()));
+    const auto flex = w.flex_c.middleCols(bf.first, static_cast<int>(bf.value.size()));
+    S.block<12, 1>(0, 0) = legs * b.value;
+    S.block<12, 1>(0, 1) = legs * b.d1;
+    S.block<12, 1>(0, 2) = legs * b.d2;
+    S.block<4, 1>(12, 0) = flex * bf.value;
+    S.block<4, 1>(12, 1) = flex * bf.d1;
+    S.block<4, 1>(12, 2) = flex * bf.d2;
+    return S;
+  }
+
   /// Builds the robot state at time t in the contact configuration of `phase`.
   void buildState(Workspace& w, int phase, double t) const {
+    buildState(w, phase, t, splineState(w, t));
+  }
+  /// The same from the splines' values S at t (splineState).
+  void buildState(Workspace& w, int phase, double t, const SplineState& S) const {
     robots::WholeBodyModel& m = *w.model;
     State& st = w.st;
     const int n = m.dofs();
     st.q = q_rest;
     st.v.setZero(n);
     st.a.setZero(n);
-    const PhaseSpline::Basis b = w.spline->evaluate(t);
-    const PhaseSpline::Basis bf = w.flex_spline->evaluate(t);
-    const int nb = static_cast<int>(b.value.size());
-    const auto legs = w.legs_c.middleCols(b.first, nb);
-    const auto flex = w.flex_c.middleCols(bf.first, static_cast<int>(bf.value.size()));
-    const Eigen::VectorXd lq = legs * b.value, lv = legs * b.d1, la = legs * b.d2;
-    const Eigen::VectorXd fq = flex * bf.value, fv = flex * bf.d1, fa = flex * bf.d2;
     for (int j = 0; j < 12; ++j) {
-      st.q(leg_coord[static_cast<std::size_t>(j)]) = lq(j);
-      st.v(leg_coord[static_cast<std::size_t>(j)]) = lv(j);
-      st.a(leg_coord[static_cast<std::size_t>(j)]) = la(j);
+      st.q(leg_coord[static_cast<std::size_t>(j)]) = S(j, 0);
+      st.v(leg_coord[static_cast<std::size_t>(j)]) = S(j, 1);
+      st.a(leg_coord[static_cast<std::size_t>(j)]) = S(j, 2);
     }
     for (int j = 0; j < 4; ++j) {
-      st.q(flex_coord[static_cast<std::size_t>(j)]) = fq(j);
-      st.v(flex_coord[static_cast<std::size_t>(j)]) = fv(j);
-      st.a(flex_coord[static_cast<std::size_t>(j)]) = fa(j);
+      st.q(flex_coord[static_cast<std::size_t>(j)]) = S(12 + j, 0);
+      st.v(flex_coord[static_cast<std::size_t>(j)]) = S(12 + j, 1);
+      st.a(flex_coord[static_cast<std::size_t>(j)]) = S(12 + j, 2);
     }
     const auto& ph = phaseTable()[static_cast<std::size_t>(phase)];
     const int anchor = anchor_of[phase];
@@ -741,10 +757,11 @@ struct OverstepProblem::Impl : ProblemModel {
     }
   }
 
-  void sampleRows(Workspace& w, int k, SampleOut& out) const {
+  /// Rows, costs and torques of sample k at the decode in w, or with the splines' values S there.
+  void sampleRows(Workspace& w, int k, SampleOut& out, const SplineState* S = nullptr) const {
     const GridPoint& g = grid[static_cast<std::size_t>(k)];
     const double t = w.timing->timeOf(g.phase, g.s);
-    buildState(w, g.phase, t);
+    buildState(w, g.phase, t, S ? *S : splineState(w, t));
     robots::WholeBodyModel& m = *w.model;
     const State& st = w.st;
     out.t = t;
@@ -846,6 +863,37 @@ struct OverstepProblem::Impl : ProblemModel {
       check_points.push_back(g);
     }
   }
+
+  // -------------------------------------------------------------- derivatives (derivatives.cpp)
+  /// A sample's outputs (rows, costs, torques) differentiated with respect to its splines'
+  /// values (SplineState, column-major index: 16 x order + row) by forward differences of that
+  /// one sample, and the splines' bases at its time: a control point's column is then the chain
+  /// rule through the basis. Double support: the leg the inverse kinematics sets is not read
+  /// (zero columns); its spline enters ds_leg_tracking alone (dsLegSplineChanged).
+  struct SampleSensitivity {
+    static constexpr int kInputs = 48;
+    Eigen::MatrixXd ineq, eq, terms, tau;  // rows x kInputs
+    PhaseSpline::Basis legs, flex;
+    int ik_leg = -1;  // double support: the leg set by inverse kinematics
+  };
+  /// Per-thread scratch of the column loops.
+  struct ColumnScratch {
+    std::vector<SampleOut> changed, local;
+    std::vector<const SampleOut*> ptr;
+    std::vector<Eigen::VectorXd> local_events;
+    Eigen::VectorXd event;
+  };
+  void sampleSensitivity(Workspace& w, int k, SampleSensitivity& d) const;
+  /// Column j of a phase duration or a foot placement, by a forward difference of the samples
+  /// and switches it moves.
+  void placementOrDurationColumn(Workspace& w, const Eigen::VectorXd& x, const Evaluation& at,
+                                 int j, ColumnScratch& c, Eigen::VectorXd& grad,
+                                 Eigen::MatrixXd& jin, Eigen::MatrixXd& jeq);
+  /// Column j of a spline control point: the samples in its support through their
+  /// sensitivities, the switches by a forward difference.
+  void controlPointColumn(Workspace& w, const Eigen::VectorXd& x, const Evaluation& at, int j,
+                          const std::vector<SampleSensitivity>& sens, ColumnScratch& c,
+                          Eigen::VectorXd& grad, Eigen::MatrixXd& jin, Eigen::MatrixXd& jeq) const;
 
   // -------------------------------------------------------------- assembly
   /// Trapezoid quadrature weight of grid point k within its phase.

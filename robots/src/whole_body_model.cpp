@@ -539,9 +539,23 @@ void WholeBodyModel::anchorBase(int frame, const Eigen::Isometry3d& X_WF, Eigen:
   impl_->checkSize(q, "positions");
   impl_->checkSize(v, "velocities");
   impl_->checkSize(a, "accelerations");
-  q.head<6>().setZero();
+  // The frame in the base body from the joints alone: the relative transforms from the base down
+  // (DART's world transforms with the base at the identity, the same products), with the base
+  // left where it is until it is set. A call whose joints and resulting base are those of the
+  // previous one (e.g. only velocities or accelerations differ) leaves DART's kinematics cached.
+  q.head<6>() = impl_->skel->getRootJoint()->getPositions();
   setPositions(q);
-  const Eigen::Isometry3d X_BF = framePose(frame);  // base at the identity
+  const auto& f = impl_->frame(frame);
+  const BodyNode* chain[64];
+  int depth = 0;
+  for (const BodyNode* b = f.body; b->getParentBodyNode() != nullptr; b = b->getParentBodyNode()) {
+    if (depth == 64)
+      throw InputError("anchorBase: the frame is more than 64 bodies below the base");
+    chain[depth++] = b;
+  }
+  Eigen::Isometry3d X_BF = Eigen::Isometry3d::Identity();
+  for (int i = depth - 1; i >= 0; --i) X_BF = X_BF * chain[i]->getRelativeTransform();
+  X_BF = X_BF * f.X_BF;
   q.head<6>() = dart::dynamics::FreeJoint::convertToPositions(X_WF * X_BF.inverse());
   setPositions(q);
   const Eigen::MatrixXd J = frameJacobian(frame);

@@ -127,8 +127,10 @@ class OverstepProblem {
   Eigen::VectorXd initialGuess();
 
   void evaluate(const Eigen::VectorXd& x, Evaluation& out);
-  /// Objective gradient and row Jacobians by forward differences, exploiting that a control
-  /// point only moves the samples inside its B-spline support; columns split over threads.
+  /// Objective gradient and row Jacobians: durations and placements by forward differences of
+  /// what each moves; a control point by the chain rule through its B-spline basis, from each
+  /// sample's forward-difference sensitivities to its spline values (derivatives.cpp); samples
+  /// and columns split over threads.
   void derivatives(const Eigen::VectorXd& x, const Evaluation& at, Eigen::VectorXd& grad,
                    Eigen::MatrixXd& jac_ineq, Eigen::MatrixXd& jac_eq);
   /// Trajectory evaluations of every kind, the finite-difference ones included.

@@ -1,0 +1,209 @@
+// The problem's first derivatives (OverstepProblem::derivatives).
+//
+// A sample's state depends on the variables through three things only: the phase durations (its
+// time, every spline's knots), the foot placements its contacts read, and the splines' values at
+// its time (Impl::SplineState: the 12 leg joints and the 4 bushing coordinates with their first
+// and second time derivatives). The durations and placements are differentiated column by
+// column, each re-evaluating the samples and switches it moves. The control points, nine in ten
+// columns, go through the samples: each sample's outputs are differentiated with respect to its
+// 48 spline values once (forward differences of that one sample), and a control point's column
+// is the chain rule through the B-spline basis, which is exact. The switch rows read the splines
+// directly and keep a forward difference per column.
+#include <chrono>
+#include <thread>
+
+#include "problem_impl.hpp"
+
+namespace overstep::planner {
+
+namespace {
+
+/// Forward-difference step (times max(1, |value|)) of a variable and of a spline value, velocity
+/// or acceleration. The rows' curvature sets it: with 1e-6 entries of the swinging leg's
+/// self-clearance, a sharp smooth minimum, came out several times their value
+/// (Problem.DerivativesMatchFineCentralDifferences).
+constexpr double kStep = 1e-7;
+
+/// The control points (full, Impl::expand) that free point fi of a curve with F free and n_ctrl
+/// full points stands for: the first and the last free point each tie three.
+std::pair<int, int> tiedControlPoints(int fi, int F, int n_ctrl) {
+  if (fi == 0) return {0, 2};
+  if (fi == F - 1) return {n_ctrl - 3, n_ctrl - 1};
+  return {fi + 2, fi + 2};
+}
+
+}  // namespace
+
+void OverstepProblem::Impl::sampleSensitivity(Workspace& w, int k, SampleSensitivity& d) const {
+  const SampleOut& base = base_samples[static_cast<std::size_t>(k)];
+  const GridPoint& g = grid[static_cast<std::size_t>(k)];
+  d.legs = w.spline->evaluate(base.t);
+  d.flex = w.flex_spline->evaluate(base.t);
+  d.ik_leg = doubleSupport(g.phase) ? 1 - anchor_of[g.phase] : -1;
+  constexpr int n = SampleSensitivity::kInputs;
+  d.ineq.setZero(base.ineq.size(), n);
+  d.eq.setZero(base.eq.size(), n);
+  d.terms.setZero(kObjectiveTerms, n);
+  d.tau.setZero(base.tau.size(), n);
+  const SplineState S0 = splineState(w, base.t);
+  const Eigen::Map<const Eigen::VectorXd> terms0(base.terms.data(), kObjectiveTerms);
+  SampleOut out;
+  for (int i = 0; i < n; ++i) {
+    const int row = i % 16, order = i / 16;
+    if (row < 12 && row / 6 == d.ik_leg) continue;  // set by the inverse kinematics
+    SplineState S = S0;
+    const double h = kStep * std::max(1.0, std::abs(S0(row, order)));
+    S(row, order) += h;
+    sampleRows(w, k, out, &S);
+    d.ineq.col(i) = (out.ineq - base.ineq) / h;
+    d.eq.col(i) = (out.eq - base.eq) / h;
+    d.terms.col(i) =
+        (Eigen::Map<const Eigen::VectorXd>(out.terms.data(), kObjectiveTerms) - terms0) / h;
+    d.tau.col(i) = (out.tau - base.tau) / h;
+  }
+}
+
+void OverstepProblem::Impl::placementOrDurationColumn(Workspace& w, const Eigen::VectorXd& x,
+                                                      const Evaluation& at, int j, ColumnScratch& c,
+                                                      Eigen::VectorXd& grad, Eigen::MatrixXd& jin,
+                                                      Eigen::MatrixXd& jeq) {
+  Eigen::VectorXd xp = x;
+  const double hj = kStep * std::max(1.0, std::abs(x(j)));
+  xp(j) += hj;
+  if (j < lay.feet) {  // a duration moves every sample
+    evaluateAll(xp, w, c.local, c.local_events);
+    Evaluation ev;
+    assemble(w, c.local, c.local_events, ev);
+    grad(j) = (ev.objective - at.objective) / hj;
+    jin.col(j) = (ev.ineq - at.ineq) / hj;
+    jeq.col(j) = (ev.eq - at.eq) / hj;
+    return;
+  }
+  // A placement: the states that read it (readsPlacement); every other value is the same at x
+  // and at x + h.
+  decode(xp, w);
+  const int v = (j - lay.feet) / 2;
+  for (std::size_t k = 0; k < grid.size(); ++k) {
+    c.ptr[k] = &base_samples[k];
+    if (!readsPlacement(grid[k].phase, v)) continue;
+    sampleRows(w, static_cast<int>(k), c.changed[k]);
+    c.ptr[k] = &c.changed[k];
+    jin.col(j).segment(ineq_off[k], ineq_cnt[k]) = (c.changed[k].ineq - base_samples[k].ineq) / hj;
+    jeq.col(j).segment(eq_off[k], eq_cnt[k]) = (c.changed[k].eq - base_samples[k].eq) / hj;
+  }
+  grad(j) = (objective(w, c.ptr, nullptr) - at.objective) / hj;
+  for (int e = 0; e < kEvents; ++e) {
+    if (!readsPlacement(eventPhase(e), v)) continue;
+    eventRows(w, e, c.event);
+    jeq.col(j).segment(event_eq_off[e], event_eq_cnt[e]) =
+        (c.event - base_events[static_cast<std::size_t>(e)]) / hj;
+  }
+}
+
+void OverstepProblem::Impl::controlPointColumn(Workspace& w, const Eigen::VectorXd& x,
+                                               const Evaluation& at, int j,
+                                               const std::vector<SampleSensitivity>& sens,
+                                               ColumnScratch& c, Eigen::VectorXd& grad,
+                                               Eigen::MatrixXd& jin, Eigen::MatrixXd& jeq) const {
+  const bool is_leg = j < lay.flex;
+  const int F = is_leg ? lay.free_cp : lay.flex_free_cp;
+  const int offset = j - (is_leg ? lay.legs : lay.flex);
+  const int row = is_leg ? offset / F : 12 + offset / F;  // SplineState row
+  const auto [c_lo, c_hi] = tiedControlPoints(offset % F, F, is_leg ? n_ctrl : n_ctrl_flex);
+  Eigen::VectorXd xp = x;
+  const double hj = kStep * std::max(1.0, std::abs(x(j)));
+  xp(j) += hj;
+  decode(xp, w);  // the switches and ds_leg_tracking read the splines themselves
+  for (std::size_t k = 0; k < grid.size(); ++k) {
+    const SampleOut& base = base_samples[k];
+    const SampleSensitivity& d = sens[k];
+    c.ptr[k] = &base;
+    // The column's spline value, velocity and acceleration at the sample (per unit of x(j)).
+    const PhaseSpline::Basis& b = is_leg ? d.legs : d.flex;
+    Eigen::Vector3d coef = Eigen::Vector3d::Zero();
+    for (int ci = std::max(c_lo, b.first); ci <= std::min(c_hi, b.first + int(b.value.size()) - 1);
+         ++ci)
+      coef += Eigen::Vector3d(b.value(ci - b.first), b.d1(ci - b.first), b.d2(ci - b.first));
+    if (coef.isZero(0.0)) continue;
+    if (is_leg && row / 6 == d.ik_leg) {
+      dsLegSplineChanged(w, static_cast<int>(k), base, c.changed[k]);
+      c.ptr[k] = &c.changed[k];
+      continue;
+    }
+    auto chain = [&](const Eigen::MatrixXd& D) -> Eigen::VectorXd {
+      return D.col(row) * coef(0) + D.col(16 + row) * coef(1) + D.col(32 + row) * coef(2);
+    };
+    jin.col(j).segment(ineq_off[k], ineq_cnt[k]) = chain(d.ineq);
+    jeq.col(j).segment(eq_off[k], eq_cnt[k]) = chain(d.eq);
+    SampleOut& ch = c.changed[k];
+    ch.t = base.t;
+    ch.tau = base.tau + hj * chain(d.tau);
+    const Eigen::VectorXd dterms = chain(d.terms);
+    for (int i = 0; i < kObjectiveTerms; ++i)
+      ch.terms[static_cast<std::size_t>(i)] =
+          base.terms[static_cast<std::size_t>(i)] + hj * dterms(i);
+    c.ptr[k] = &ch;
+  }
+  grad(j) = (objective(w, c.ptr, nullptr) - at.objective) / hj;
+  const PhaseSpline& spline = is_leg ? *w.spline : *w.flex_spline;
+  const auto& knots = spline.knots();
+  const double t_lo = knots(c_lo), t_hi = knots(c_hi + spline.degree() + 1);
+  for (int e = 0; e < kEvents; ++e) {
+    const double t = w.timing->start(eventBoundary(e));
+    if (t < t_lo - 1e-12 || t > t_hi + 1e-12) continue;
+    eventRows(w, e, c.event);
+    jeq.col(j).segment(event_eq_off[e], event_eq_cnt[e]) =
+        (c.event - base_events[static_cast<std::size_t>(e)]) / hj;
+  }
+}
+
+void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at,
+                                  Eigen::VectorXd& grad, Eigen::MatrixXd& jin,
+                                  Eigen::MatrixXd& jeq) {
+  Impl& m = *impl_;
+  if (m.base_x.size() != x.size() || m.base_x != x) {
+    Evaluation tmp;
+    evaluate(x, tmp);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  const int n = m.lay.total;
+  grad.setZero(n);
+  jin.setZero(m.n_ineq, n);
+  jeq.setZero(m.n_eq, n);
+  // Two passes over the workspaces: the samples' sensitivities, then the columns. Each item's
+  // numbers do not depend on the thread that computes it.
+  std::vector<Impl::SampleSensitivity> sens(m.grid.size());
+  auto parallel = [&](int count, auto&& item) {
+    std::atomic<int> next{0};
+    auto worker = [&](std::size_t wi) {
+      for (int i = next++; i < count; i = next++) item(m.ws[wi], i);
+    };
+    std::vector<std::thread> threads;
+    for (std::size_t i = 1; i < m.ws.size(); ++i) threads.emplace_back(worker, i);
+    worker(0);
+    for (auto& t : threads) t.join();
+  };
+  for (auto& w : m.ws) m.decode(x, w);
+  parallel(static_cast<int>(m.grid.size()), [&](Impl::Workspace& w, int k) {
+    m.sampleSensitivity(w, k, sens[static_cast<std::size_t>(k)]);
+  });
+  std::vector<Impl::ColumnScratch> scratch(m.ws.size());
+  for (auto& c : scratch) {
+    c.changed.resize(m.grid.size());
+    c.ptr.resize(m.grid.size());
+  }
+  parallel(n, [&](Impl::Workspace& w, int j) {
+    Impl::ColumnScratch& c = scratch[static_cast<std::size_t>(&w - m.ws.data())];
+    if (j < m.lay.legs)
+      m.placementOrDurationColumn(w, x, at, j, c, grad, jin, jeq);
+    else
+      m.controlPointColumn(w, x, at, j, sens, c, grad, jin, jeq);
+  });
+  // Workspace 0 holds a perturbed decode: restore the baseline decode for later use.
+  m.decode(x, m.ws.front());
+  ++m.work.jacobians;
+  m.work.derivatives_s +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace overstep::planner
