@@ -257,6 +257,16 @@ int runPlan(const PlanOptions& o) {
   // sent after it never kills the process outright.
   const cli::StopSignals stop;
   planner::OverstepProblem problem(model, cfg, ob);
+  if (const double d = problem.startClearance(); d < cfg.obstacle_clearance - 1e-9) {
+    // The feet stand at their start until they lift off: their capsules' distance to the bar
+    // there is the same in every plan (answered at once; the solver would search until its
+    // time limit).
+    throw InfeasibleError("the feet's collision capsules at the start are " + std::to_string(d) +
+                          " m from the bar, under obstacle_clearance " +
+                          std::to_string(cfg.obstacle_clearance) +
+                          " m (the bar nearer the toes than their overhang and the clearance "
+                          "allow): no plan exists");
+  }
   Eigen::VectorXd warm;
   if (!o.warm_start.empty()) {
     const core::Plan wp = core::loadPlan(o.warm_start);

@@ -30,6 +30,26 @@ int OverstepProblem::equalityCount() const { return impl_->n_eq; }
 const std::vector<Family>& OverstepProblem::inequalityFamilies() const { return impl_->ineq_fam; }
 const std::vector<Family>& OverstepProblem::equalityFamilies() const { return impl_->eq_fam; }
 double OverstepProblem::toesX() const { return impl_->toes_x; }
+double OverstepProblem::startClearance() const {
+  const Impl& m = *impl_;
+  robots::WholeBodyModel tmp(m.model_template);
+  tmp.setPositions(m.q_rest);
+  double d = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < 2; ++f) {
+    // The start placements (bounds(): fixed): the right sole at (0, -w), the left at (0, w).
+    const double y = (f == kLeft ? 1.0 : -1.0) * m.cfg.start_half_width;
+    // The model's world at half-sitting carried so that the sole lands on its start placement.
+    const Eigen::Isometry3d X_shift = placement(0.0, y) * tmp.framePose(m.sole_frame[f]).inverse();
+    for (int c : m.leg_caps[f]) {
+      const CapsuleRef& ref = m.caps[static_cast<std::size_t>(c)];
+      if (ref.link != m.leg_links[f][2]) continue;  // the foot's capsules only
+      const Eigen::Isometry3d X = X_shift * tmp.framePose(ref.frame);
+      d = std::min(d,
+                   robots::obstacleDistance({X * ref.p0, X * ref.p1, ref.radius}, m.obstacle_geom));
+    }
+  }
+  return d;
+}
 int OverstepProblem::evaluationCount() const { return impl_->evaluations.load(); }
 const WorkAccount& OverstepProblem::work() const { return impl_->work; }
 void OverstepProblem::setDifficulty(double h, double box, bool last_stage) {

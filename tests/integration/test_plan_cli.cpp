@@ -55,6 +55,11 @@ TEST(PlanCli, ImpossibleObstacleIsExitThreeAtOnce) {
   EXPECT_EQ(w.code, 3) << w.err;
   EXPECT_NE(w.err.find("beyond step_length_max"), std::string::npos) << w.err;
   EXPECT_LT(w.seconds, 30.0);
+  // A bar nearer the standing toes than the feet's capsules and the clearance allow.
+  const RunResult g = run("plan --obstacle-gap 0.02 --out " + dir.file("g.json"));
+  EXPECT_EQ(g.code, 3) << g.err;
+  EXPECT_NE(g.err.find("under obstacle_clearance"), std::string::npos) << g.err;
+  EXPECT_LT(g.seconds, 30.0);
 }
 
 TEST(CheckCli, BadPlanFilesAreExitTwo) {

@@ -16,6 +16,7 @@
 #include "overstep/planner/check.hpp"
 #include "overstep/planner/problem.hpp"
 #include "overstep/planner/solver.hpp"
+#include "overstep/robots/leg.hpp"
 #include "test_util.hpp"
 
 namespace overstep::planner {
@@ -304,6 +305,35 @@ TEST_F(Problem, TheHomotopyRaisesTheBarUnderTheSwingingLegOnly) {
   }
   EXPECT_GT(ds, 20);
   EXPECT_GT(ss_lower, 5);
+}
+
+// The feet's capsules where they stand at the start: the bar's distance to them grows with the gap
+// one for one, and equals the gap less the capsules' overhang in front of the toes, taken from
+// the robot description (the foot capsules' front ends, carried into the sole frame by the
+// model at half-sitting).
+TEST_F(Problem, StartClearanceIsTheGapLessTheFeetCapsulesOverhang) {
+  auto clearance = [&](double gap) {
+    core::ObstacleSpec ob;
+    ob.gap = gap;
+    return OverstepProblem(*model_, PlannerConfig{}, ob).startClearance();
+  };
+  EXPECT_NEAR(clearance(0.05) - clearance(0.03), 0.02, 1e-12);
+  const auto& d = model_->description();
+  robots::WholeBodyModel m(*model_);
+  m.setPositions(m.halfSitting());
+  double overhang = -std::numeric_limits<double>::infinity();
+  for (const robots::LegChain& leg : robots::legChains(*model_)) {
+    const auto* foot = d.foot(leg.side);
+    const Eigen::Isometry3d X_SW = m.framePose(m.frameIndex(foot->sole_frame)).inverse();
+    for (const auto& c : d.capsules) {
+      if (c.link != leg.foot_link) continue;
+      const Eigen::Isometry3d X_SC = X_SW * m.framePose(m.frameIndex(c.link));
+      const double front = std::max((X_SC * c.p0).x(), (X_SC * c.p1).x()) + c.radius;
+      overhang = std::max(overhang, front - foot->sole.x_front);
+    }
+  }
+  ASSERT_TRUE(std::isfinite(overhang));
+  EXPECT_NEAR(clearance(0.03), 0.03 - overhang, 1e-9);
 }
 
 TEST_F(Problem, LayoutAndRowFamiliesAreConsistent) {

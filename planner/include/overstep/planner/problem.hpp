@@ -108,6 +108,11 @@ class OverstepProblem {
   const std::vector<GridPoint>& checkPoints() const;
   /// x of the start toes (front edge of the start soles); the obstacle gap is measured from it.
   double toesX() const;
+  /// Distance (m) from the target bar to the nearest collision capsule of the feet (the
+  /// capsules rigid with the soles) where they stand at the start, which no plan moves: below
+  /// obstacle_clearance the request has no plan (e.g. a bar nearer the toes than the capsules'
+  /// overhang in front of the soles and the clearance allow).
+  double startClearance() const;
 
   void bounds(Eigen::VectorXd& lower, Eigen::VectorXd& upper) const;
   /// Typical magnitude of a useful change of each variable (s, m, rad): solvers work on x / scale
