@@ -6,6 +6,7 @@
 
 #include <Eigen/SVD>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -468,11 +469,11 @@ TEST_F(Problem, DerivativesMatchCentralDifferencesInEveryColumn) {
 
 // Every column against central differences of whole evaluations with a fine step (1e-7), to kFine
 // of the column's largest entry (measured 1.6e-5), on the guess and on a restored point, with
-// check points in the grid: the durations' and placements' forward differences of what each
-// moves, the control points' chain rule through the basis. Forward differences of whole
-// evaluations with a step of 1e-6, which the derivatives were before, miss by up to 112 % there
-// (printed): the swinging leg's self-clearance at the swing's check point, a sharp smooth
-// minimum, whose curvature such a step does not resolve.
+// check points in the grid, every row family with non-zero entries compared (printed per family):
+// the durations' and placements' forward differences of what each moves, the control points' chain
+// rule through the basis. Forward differences of whole evaluations with a step of 1e-6, which the
+// derivatives were before, miss by up to 112 % there (printed): the swinging leg's self-clearance
+// at the swing's check point, a sharp smooth minimum, whose curvature such a step does not resolve.
 TEST_F(Problem, DerivativesMatchFineCentralDifferences) {
   std::vector<GridPoint> extra = {{0, 0.45, 0.0}, {2, 0.3, 0.0}, {3, 0.6, 0.0}};
   core::ObstacleSpec ob;
@@ -480,6 +481,15 @@ TEST_F(Problem, DerivativesMatchFineCentralDifferences) {
   OverstepProblem refined(*model_, PlannerConfig{}, ob, extra);
   constexpr double kFine = 1e-4;
   double worst = 0.0, worst_coarse = 0.0;
+  // Per row family (and the objective, the last slot): the worst entry and how many entries were
+  // compared where the central difference is not zero (every family must have some: a family
+  // whose derivatives are all zero at both points would pass vacuously).
+  constexpr int kSlots = static_cast<int>(Family::kCount) + 1;
+  std::array<double, kSlots> fam_worst{};
+  std::array<int, kSlots> fam_tested{};
+  std::vector<int> slot_of(1, kSlots - 1);
+  for (Family f : refined.inequalityFamilies()) slot_of.push_back(static_cast<int>(f));
+  for (Family f : refined.equalityFamilies()) slot_of.push_back(static_cast<int>(f));
   for (const Eigen::VectorXd& x : {*x_, restored()}) {
     Evaluation e0;
     refined.evaluate(x, e0);
@@ -504,6 +514,11 @@ TEST_F(Problem, DerivativesMatchFineCentralDifferences) {
       const double scale = 1.0 + cd.cwiseAbs().maxCoeff();
       const double rel = (J - cd).cwiseAbs().maxCoeff() / scale;
       worst = std::max(worst, rel);
+      for (Eigen::Index r = 0; r < cd.size(); ++r) {
+        const int slot = slot_of[static_cast<std::size_t>(r)];
+        fam_worst[slot] = std::max(fam_worst[slot], std::abs(J(r) - cd(r)) / scale);
+        if (std::abs(cd(r)) > 1e-6) ++fam_tested[slot];
+      }
       ASSERT_LE(rel, kFine) << "column " << j;
       const double hc = 1e-6 * std::max(1.0, std::abs(x(j)));
       const Eigen::VectorXd coarse = (values(j, hc) - v0) / hc;
@@ -514,6 +529,14 @@ TEST_F(Problem, DerivativesMatchFineCentralDifferences) {
       "worst column against central differences: %.2e (forward differences of whole "
       "evaluations, step 1e-6: %.2e)\n",
       worst, worst_coarse);
+  for (int slot = 0; slot < kSlots; ++slot) {
+    const bool present = std::count(slot_of.begin(), slot_of.end(), slot) > 0;
+    if (!present) continue;
+    const char* name = slot == kSlots - 1 ? "objective" : familyName(static_cast<Family>(slot));
+    std::printf("  %-15s worst %.2e over %d non-zero entries\n", name, fam_worst[slot],
+                fam_tested[slot]);
+    EXPECT_GT(fam_tested[slot], 0) << name << ": no non-zero derivative was compared";
+  }
 }
 
 // Mesh refinement: check points carry the path constraints of their instant (not the elastic
