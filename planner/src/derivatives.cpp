@@ -1,14 +1,14 @@
 // The problem's first derivatives (OverstepProblem::derivatives).
 //
-// A sample's state depends on the variables through three things only: the phase durations (its
-// time, every spline's knots), the foot placements its contacts read, and the splines' values at
-// its time (Impl::SplineState: the 12 leg joints and the 4 bushing coordinates with their first
-// and second time derivatives). The durations and placements are differentiated column by
-// column, each re-evaluating the samples and switches it moves. The control points, nine in ten
-// columns, go through the samples: each sample's outputs are differentiated with respect to its
-// 48 spline values once (forward differences of that one sample), and a control point's column
-// is the chain rule through the B-spline basis, which is exact. The switch rows read the splines
-// directly and keep a forward difference per column.
+// A sample's or a switch's rows depend on the variables through three things only: the phase
+// durations (its time, every spline's knots), the foot placements its contacts read, and the
+// splines' values at its time (SplineState: the 12 leg joints and the 4 bushing coordinates with
+// their first and second time derivatives). The durations and placements are differentiated
+// column by column, each re-evaluating the samples and switches it moves. The control points,
+// nine in ten columns, go through the samples and switches: each one's outputs are
+// differentiated with respect to its 48 spline values once (forward differences of that one
+// point), and a control point's column is the chain rule through the B-spline basis, which is
+// exact.
 #include <chrono>
 #include <thread>
 
@@ -32,15 +32,30 @@ std::pair<int, int> tiedControlPoints(int fi, int F, int n_ctrl) {
   return {fi + 2, fi + 2};
 }
 
+/// A curve's value, velocity and acceleration per unit of the control points c_lo..c_hi at the
+/// basis b's instant (zero outside their support).
+Eigen::Vector3d basisCoefficients(const PhaseSpline::Basis& b, int c_lo, int c_hi) {
+  Eigen::Vector3d coef = Eigen::Vector3d::Zero();
+  const int last = b.first + static_cast<int>(b.value.size()) - 1;
+  for (int ci = std::max(c_lo, b.first); ci <= std::min(c_hi, last); ++ci)
+    coef += Eigen::Vector3d(b.value(ci - b.first), b.d1(ci - b.first), b.d2(ci - b.first));
+  return coef;
+}
+
+/// Column `row` of the spline values' sensitivities, chained with a control point's coefficients.
+Eigen::VectorXd chain(const Eigen::MatrixXd& D, int row, const Eigen::Vector3d& coef) {
+  return D.col(row) * coef(0) + D.col(16 + row) * coef(1) + D.col(32 + row) * coef(2);
+}
+
 }  // namespace
 
-void OverstepProblem::Impl::sampleSensitivity(Workspace& w, int k, SampleSensitivity& d) const {
+void OverstepProblem::Impl::sampleSensitivity(Workspace& w, int k, Sensitivity& d) const {
   const SampleOut& base = base_samples[static_cast<std::size_t>(k)];
   const GridPoint& g = grid[static_cast<std::size_t>(k)];
   d.legs = w.spline->evaluate(base.t);
   d.flex = w.flex_spline->evaluate(base.t);
   d.ik_leg = doubleSupport(g.phase) ? 1 - anchor_of[g.phase] : -1;
-  constexpr int n = SampleSensitivity::kInputs;
+  constexpr int n = Sensitivity::kInputs;
   d.ineq.setZero(base.ineq.size(), n);
   d.eq.setZero(base.eq.size(), n);
   d.terms.setZero(kObjectiveTerms, n);
@@ -63,6 +78,26 @@ void OverstepProblem::Impl::sampleSensitivity(Workspace& w, int k, SampleSensiti
   }
 }
 
+void OverstepProblem::Impl::eventSensitivity(Workspace& w, int e, Sensitivity& d) const {
+  const Eigen::VectorXd& base = base_events[static_cast<std::size_t>(e)];
+  const double t = w.timing->start(eventBoundary(e));
+  d.legs = w.spline->evaluate(t);
+  d.flex = w.flex_spline->evaluate(t);
+  d.ik_leg = -1;
+  constexpr int n = Sensitivity::kInputs;
+  d.eq.setZero(base.size(), n);
+  const SplineState S0 = splineState(w, t);
+  Eigen::VectorXd out;
+  for (int i = 0; i < n; ++i) {
+    const int row = i % 16, order = i / 16;
+    SplineState S = S0;
+    const double h = kStep * std::max(1.0, std::abs(S0(row, order)));
+    S(row, order) += h;
+    eventRows(w, e, out, &S);
+    d.eq.col(i) = (out - base) / h;
+  }
+}
+
 void OverstepProblem::Impl::placementOrDurationColumn(Workspace& w, const Eigen::VectorXd& x,
                                                       const Evaluation& at, int j, ColumnScratch& c,
                                                       Eigen::VectorXd& grad, Eigen::MatrixXd& jin,
@@ -77,6 +112,7 @@ void OverstepProblem::Impl::placementOrDurationColumn(Workspace& w, const Eigen:
     grad(j) = (ev.objective - at.objective) / hj;
     jin.col(j) = (ev.ineq - at.ineq) / hj;
     jeq.col(j) = (ev.eq - at.eq) / hj;
+    decode(x, w);
     return;
   }
   // A placement: the states that read it (readsPlacement); every other value is the same at x
@@ -98,11 +134,12 @@ void OverstepProblem::Impl::placementOrDurationColumn(Workspace& w, const Eigen:
     jeq.col(j).segment(event_eq_off[e], event_eq_cnt[e]) =
         (c.event - base_events[static_cast<std::size_t>(e)]) / hj;
   }
+  decode(x, w);
 }
 
-void OverstepProblem::Impl::controlPointColumn(Workspace& w, const Eigen::VectorXd& x,
+void OverstepProblem::Impl::controlPointColumn(const Workspace& w, const Eigen::VectorXd& x,
                                                const Evaluation& at, int j,
-                                               const std::vector<SampleSensitivity>& sens,
+                                               const std::vector<Sensitivity>& sens,
                                                ColumnScratch& c, Eigen::VectorXd& grad,
                                                Eigen::MatrixXd& jin, Eigen::MatrixXd& jeq) const {
   const bool is_leg = j < lay.flex;
@@ -110,50 +147,36 @@ void OverstepProblem::Impl::controlPointColumn(Workspace& w, const Eigen::Vector
   const int offset = j - (is_leg ? lay.legs : lay.flex);
   const int row = is_leg ? offset / F : 12 + offset / F;  // SplineState row
   const auto [c_lo, c_hi] = tiedControlPoints(offset % F, F, is_leg ? n_ctrl : n_ctrl_flex);
-  Eigen::VectorXd xp = x;
   const double hj = kStep * std::max(1.0, std::abs(x(j)));
-  xp(j) += hj;
-  decode(xp, w);  // the switches and ds_leg_tracking read the splines themselves
   for (std::size_t k = 0; k < grid.size(); ++k) {
     const SampleOut& base = base_samples[k];
-    const SampleSensitivity& d = sens[k];
+    const Sensitivity& d = sens[k];
     c.ptr[k] = &base;
-    // The column's spline value, velocity and acceleration at the sample (per unit of x(j)).
-    const PhaseSpline::Basis& b = is_leg ? d.legs : d.flex;
-    Eigen::Vector3d coef = Eigen::Vector3d::Zero();
-    for (int ci = std::max(c_lo, b.first); ci <= std::min(c_hi, b.first + int(b.value.size()) - 1);
-         ++ci)
-      coef += Eigen::Vector3d(b.value(ci - b.first), b.d1(ci - b.first), b.d2(ci - b.first));
+    const Eigen::Vector3d coef = basisCoefficients(is_leg ? d.legs : d.flex, c_lo, c_hi);
     if (coef.isZero(0.0)) continue;
     if (is_leg && row / 6 == d.ik_leg) {
-      dsLegSplineChanged(w, static_cast<int>(k), base, c.changed[k]);
+      dsLegSplineChanged(w, static_cast<int>(k), base, row % 6, hj * coef(0), c.changed[k]);
       c.ptr[k] = &c.changed[k];
       continue;
     }
-    auto chain = [&](const Eigen::MatrixXd& D) -> Eigen::VectorXd {
-      return D.col(row) * coef(0) + D.col(16 + row) * coef(1) + D.col(32 + row) * coef(2);
-    };
-    jin.col(j).segment(ineq_off[k], ineq_cnt[k]) = chain(d.ineq);
-    jeq.col(j).segment(eq_off[k], eq_cnt[k]) = chain(d.eq);
+    jin.col(j).segment(ineq_off[k], ineq_cnt[k]) = chain(d.ineq, row, coef);
+    jeq.col(j).segment(eq_off[k], eq_cnt[k]) = chain(d.eq, row, coef);
+    // The objective through the linearised outputs (a forward difference of its quadratic terms).
     SampleOut& ch = c.changed[k];
     ch.t = base.t;
-    ch.tau = base.tau + hj * chain(d.tau);
-    const Eigen::VectorXd dterms = chain(d.terms);
+    ch.tau = base.tau + hj * chain(d.tau, row, coef);
+    const Eigen::VectorXd dterms = chain(d.terms, row, coef);
     for (int i = 0; i < kObjectiveTerms; ++i)
       ch.terms[static_cast<std::size_t>(i)] =
           base.terms[static_cast<std::size_t>(i)] + hj * dterms(i);
     c.ptr[k] = &ch;
   }
   grad(j) = (objective(w, c.ptr, nullptr) - at.objective) / hj;
-  const PhaseSpline& spline = is_leg ? *w.spline : *w.flex_spline;
-  const auto& knots = spline.knots();
-  const double t_lo = knots(c_lo), t_hi = knots(c_hi + spline.degree() + 1);
   for (int e = 0; e < kEvents; ++e) {
-    const double t = w.timing->start(eventBoundary(e));
-    if (t < t_lo - 1e-12 || t > t_hi + 1e-12) continue;
-    eventRows(w, e, c.event);
-    jeq.col(j).segment(event_eq_off[e], event_eq_cnt[e]) =
-        (c.event - base_events[static_cast<std::size_t>(e)]) / hj;
+    const Sensitivity& d = sens[grid.size() + static_cast<std::size_t>(e)];
+    const Eigen::Vector3d coef = basisCoefficients(is_leg ? d.legs : d.flex, c_lo, c_hi);
+    if (coef.isZero(0.0)) continue;
+    jeq.col(j).segment(event_eq_off[e], event_eq_cnt[e]) = chain(d.eq, row, coef);
   }
 }
 
@@ -170,9 +193,10 @@ void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at
   grad.setZero(n);
   jin.setZero(m.n_ineq, n);
   jeq.setZero(m.n_eq, n);
-  // Two passes over the workspaces: the samples' sensitivities, then the columns. Each item's
-  // numbers do not depend on the thread that computes it.
-  std::vector<Impl::SampleSensitivity> sens(m.grid.size());
+  // Two passes over the workspaces: the samples' and switches' sensitivities, then the columns.
+  // Each item's numbers do not depend on the thread that computes it.
+  const int samples = static_cast<int>(m.grid.size());
+  std::vector<Impl::Sensitivity> sens(m.grid.size() + Impl::kEvents);
   auto parallel = [&](int count, auto&& item) {
     std::atomic<int> next{0};
     auto worker = [&](std::size_t wi) {
@@ -184,8 +208,11 @@ void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at
     for (auto& t : threads) t.join();
   };
   for (auto& w : m.ws) m.decode(x, w);
-  parallel(static_cast<int>(m.grid.size()), [&](Impl::Workspace& w, int k) {
-    m.sampleSensitivity(w, k, sens[static_cast<std::size_t>(k)]);
+  parallel(samples + Impl::kEvents, [&](Impl::Workspace& w, int i) {
+    if (i < samples)
+      m.sampleSensitivity(w, i, sens[static_cast<std::size_t>(i)]);
+    else
+      m.eventSensitivity(w, i - samples, sens[static_cast<std::size_t>(i)]);
   });
   std::vector<Impl::ColumnScratch> scratch(m.ws.size());
   for (auto& c : scratch) {
@@ -199,8 +226,6 @@ void OverstepProblem::derivatives(const Eigen::VectorXd& x, const Evaluation& at
     else
       m.controlPointColumn(w, x, at, j, sens, c, grad, jin, jeq);
   });
-  // Workspace 0 holds a perturbed decode: restore the baseline decode for later use.
-  m.decode(x, m.ws.front());
   ++m.work.jacobians;
   m.work.derivatives_s +=
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

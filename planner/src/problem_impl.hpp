@@ -267,10 +267,7 @@ struct OverstepProblem::Impl : ProblemModel {
     return footPlacement(phase, 1 - anchor_of[phase], w);
   }
 
-  /// The splines' values at time t: rows the 12 leg joints (legs_c's order) then the 4 bushing
-  /// coordinates (flex_c's), columns the value, first and second time derivative (rad, rad/s,
-  /// rad/s^2). What a sample's state depends on besides its phase, its time and the placements.
-  using SplineState = Eigen::Matrix<double, 16, 3>;
+  /// The splines' values at time t (SplineState: legs_c's rows, then flex_c's).
   SplineState splineState(const Workspace& w, double t) const {
     SplineState S;
     const PhaseSpline::Basis b = w.spline->evaluate(t);
@@ -794,16 +791,19 @@ struct OverstepProblem::Impl : ProblemModel {
     out.ik_leg = st.ik_leg;
   }
 
-  /// Sample k of `base` as it is after a change of the double-support leg's spline alone (the
-  /// decode in w): in double support that spline only picks the leg's inverse-kinematics branch
-  /// (unchanged by a small change) and enters ds_leg_tracking, so the rows and every other term
-  /// keep their values. The same values as sampleRows at that decode, without its state.
-  void dsLegSplineChanged(const Workspace& w, int k, const SampleOut& base, SampleOut& out) const {
+  /// Sample k of `base` (double support) as it is after joint j of the leg the inverse
+  /// kinematics sets moves by dq in its spline alone (the decode in w otherwise): that spline only
+  /// picks the leg's inverse-kinematics branch (unchanged by a small change) and enters
+  /// ds_leg_tracking, so the rows and every other term keep their values.
+  void dsLegSplineChanged(const Workspace& w, int k, const SampleOut& base, int j, double dq,
+                          SampleOut& out) const {
     out = base;
     if (!ds_tracking) return;
     const GridPoint& g = grid[static_cast<std::size_t>(k)];
+    robots::Vector6d seed = legSpline(w, 1 - anchor_of[g.phase], base.t);
+    seed(j) += dq;
     State st;
-    st.ik_seed_gap = seedGap(base.ik_leg, legSpline(w, 1 - anchor_of[g.phase], base.t));
+    st.ik_seed_gap = seedGap(base.ik_leg, seed);
     SampleData sd;
     sd.g = &g;
     sd.t = base.t;
@@ -812,16 +812,16 @@ struct OverstepProblem::Impl : ProblemModel {
   }
 
   /// Switching rows at event e (instants t1..t4): the spline of the leg that changes
-  /// representation matches the double-support IK in position and velocity; lift-off forces.
-  void eventRows(Workspace& w, int e, Eigen::VectorXd& out) const {
+  /// representation matches the double-support IK in position and velocity; lift-off forces. At
+  /// the decode in w, or with the splines' values S at the switch.
+  void eventRows(Workspace& w, int e, Eigen::VectorXd& out, const SplineState* S = nullptr) const {
     const double t = w.timing->start(eventBoundary(e));
-    buildState(w, eventPhase(e), t);
-    const PhaseSpline::Basis b = w.spline->evaluate(t);
+    const SplineState S0 = S ? *S : splineState(w, t);
+    buildState(w, eventPhase(e), t, S0);
     EventData ed;
     ed.event = e;
     ed.st = &w.st;
-    ed.basis = &b;
-    ed.legs_c = &w.legs_c;
+    ed.spline = &S0;
     out.resize(event_eq_cnt[e]);
     int r = 0;
     for (const auto& term : event_terms) {
@@ -865,16 +865,17 @@ struct OverstepProblem::Impl : ProblemModel {
   }
 
   // -------------------------------------------------------------- derivatives (derivatives.cpp)
-  /// A sample's outputs (rows, costs, torques) differentiated with respect to its splines'
-  /// values (SplineState, column-major index: 16 x order + row) by forward differences of that
-  /// one sample, and the splines' bases at its time: a control point's column is then the chain
-  /// rule through the basis. Double support: the leg the inverse kinematics sets is not read
-  /// (zero columns); its spline enters ds_leg_tracking alone (dsLegSplineChanged).
-  struct SampleSensitivity {
+  /// A sample's or a switch's outputs (rows; a sample's costs and torques too) differentiated with
+  /// respect to its splines' values (SplineState, column-major index: 16 x order + row) by
+  /// forward differences of that one point, and the splines' bases at its time: a control
+  /// point's column is then the chain rule through the basis. A double-support sample does not
+  /// read the spline of the leg its inverse kinematics sets (zero columns; it enters
+  /// ds_leg_tracking alone, dsLegSplineChanged); a switch reads every one.
+  struct Sensitivity {
     static constexpr int kInputs = 48;
     Eigen::MatrixXd ineq, eq, terms, tau;  // rows x kInputs
     PhaseSpline::Basis legs, flex;
-    int ik_leg = -1;  // double support: the leg set by inverse kinematics
+    int ik_leg = -1;  // double-support sample: the leg set by inverse kinematics
   };
   /// Per-thread scratch of the column loops.
   struct ColumnScratch {
@@ -883,16 +884,17 @@ struct OverstepProblem::Impl : ProblemModel {
     std::vector<Eigen::VectorXd> local_events;
     Eigen::VectorXd event;
   };
-  void sampleSensitivity(Workspace& w, int k, SampleSensitivity& d) const;
+  void sampleSensitivity(Workspace& w, int k, Sensitivity& d) const;
+  void eventSensitivity(Workspace& w, int e, Sensitivity& d) const;
   /// Column j of a phase duration or a foot placement, by a forward difference of the samples
-  /// and switches it moves.
+  /// and switches it moves; leaves w decoded at x.
   void placementOrDurationColumn(Workspace& w, const Eigen::VectorXd& x, const Evaluation& at,
                                  int j, ColumnScratch& c, Eigen::VectorXd& grad,
                                  Eigen::MatrixXd& jin, Eigen::MatrixXd& jeq);
-  /// Column j of a spline control point: the samples in its support through their
-  /// sensitivities, the switches by a forward difference.
-  void controlPointColumn(Workspace& w, const Eigen::VectorXd& x, const Evaluation& at, int j,
-                          const std::vector<SampleSensitivity>& sens, ColumnScratch& c,
+  /// Column j of a spline control point: the chain rule through the basis at the samples and
+  /// switches in its support (sens: the samples', then the switches'); w decoded at x.
+  void controlPointColumn(const Workspace& w, const Eigen::VectorXd& x, const Evaluation& at, int j,
+                          const std::vector<Sensitivity>& sens, ColumnScratch& c,
                           Eigen::VectorXd& grad, Eigen::MatrixXd& jin, Eigen::MatrixXd& jeq) const;
 
   // -------------------------------------------------------------- assembly

@@ -79,6 +79,12 @@ struct CapsuleRef {
 };
 
 /// What one sample contributes.
+/// The splines' values at one instant: rows the 12 leg joints (the leg control points' row order)
+/// then the 4 bushing coordinates, columns the value, first and second time derivative (rad,
+/// rad/s, rad/s^2). What a sample's or a switch's rows depend on besides its phase, its time and
+/// the placements.
+using SplineState = Eigen::Matrix<double, 16, 3>;
+
 struct SampleOut {
   Eigen::VectorXd ineq;
   Eigen::VectorXd eq;

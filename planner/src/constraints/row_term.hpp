@@ -40,12 +40,11 @@ class SampleTerm {
 };
 
 /// What the row terms of a contact switch read: the state of the double-support phase at the
-/// switch (ProblemModel::eventPhase) and the leg spline's basis there.
+/// switch (ProblemModel::eventPhase) and the splines' values there.
 struct EventData {
   int event = 0;  ///< 0..3: t1 (end of phase 0), t2 (start of 2), t3 (end of 2), t4 (start of 4)
   const State* st = nullptr;
-  const PhaseSpline::Basis* basis = nullptr;
-  const Eigen::MatrixXd* legs_c = nullptr;  ///< leg control points, 12 x C
+  const SplineState* spline = nullptr;
 };
 
 /// A family of rows at the contact switches.

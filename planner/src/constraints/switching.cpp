@@ -12,18 +12,16 @@ class Switching final : public EventTerm {
   Family family() const override { return Family::Switching; }
   int rows(const ProblemModel&, int) const override { return 12; }
   void evaluate(const ProblemModel& p, const EventData& d, double* out) const override {
-    const PhaseSpline::Basis& b = *d.basis;
+    const SplineState& S = *d.spline;
     const int leg = 1 - p.anchor_of[ProblemModel::eventPhase(d.event)];
     int r = 0;
     for (int j = 0; j < 6; ++j) {
       const int row = 6 * leg + j;
-      const double qs = d.legs_c->row(row).segment(b.first, 4).dot(b.value);
-      out[r++] = (qs - d.st->q(p.leg_coord[static_cast<std::size_t>(row)])) / kJointScale;
+      out[r++] = (S(row, 0) - d.st->q(p.leg_coord[static_cast<std::size_t>(row)])) / kJointScale;
     }
     for (int j = 0; j < 6; ++j) {
       const int row = 6 * leg + j;
-      const double vs = d.legs_c->row(row).segment(b.first, 4).dot(b.d1);
-      out[r++] = (vs - d.st->v(p.leg_coord[static_cast<std::size_t>(row)])) / 1.0;
+      out[r++] = (S(row, 1) - d.st->v(p.leg_coord[static_cast<std::size_t>(row)])) / 1.0;
     }
   }
 };
