@@ -253,13 +253,6 @@ struct OverstepProblem::Impl : ProblemModel {
     }
     return gap2;
   }
-  /// The spline values of leg `leg`'s joints at time t (as buildState computes them).
-  robots::Vector6d legSpline(const Workspace& w, int leg, double t) const {
-    const PhaseSpline::Basis b = w.spline->evaluate(t);
-    const int nb = static_cast<int>(b.value.size());
-    const Eigen::VectorXd lq = w.legs_c.middleCols(b.first, nb) * b.value;
-    return lq.segment<6>(6 * leg);
-  }
   Eigen::Isometry3d anchorPlacement(int phase, const Workspace& w) const {
     return footPlacement(phase, anchor_of[phase], w);
   }
@@ -800,7 +793,7 @@ struct OverstepProblem::Impl : ProblemModel {
     out = base;
     if (!ds_tracking) return;
     const GridPoint& g = grid[static_cast<std::size_t>(k)];
-    robots::Vector6d seed = legSpline(w, 1 - anchor_of[g.phase], base.t);
+    robots::Vector6d seed = splineState(w, base.t).block<6, 1>(6 * (1 - anchor_of[g.phase]), 0);
     seed(j) += dq;
     State st;
     st.ik_seed_gap = seedGap(base.ik_leg, seed);
