@@ -42,6 +42,16 @@ Eigen::Vector3d basisCoefficients(const PhaseSpline::Basis& b, int c_lo, int c_h
   return coef;
 }
 
+/// S0 with its entry i (column-major: 16 x order + row) moved by its forward-difference step into
+/// S; returns the step.
+double perturbed(const SplineState& S0, int i, SplineState& S) {
+  const int row = i % 16, order = i / 16;
+  S = S0;
+  const double h = kStep * std::max(1.0, std::abs(S0(row, order)));
+  S(row, order) += h;
+  return h;
+}
+
 /// Column `row` of the spline values' sensitivities, chained with a control point's coefficients.
 Eigen::VectorXd chain(const Eigen::MatrixXd& D, int row, const Eigen::Vector3d& coef) {
   return D.col(row) * coef(0) + D.col(16 + row) * coef(1) + D.col(32 + row) * coef(2);
@@ -63,12 +73,11 @@ void OverstepProblem::Impl::sampleSensitivity(Workspace& w, int k, Sensitivity& 
   const SplineState S0 = splineState(w, base.t);
   const Eigen::Map<const Eigen::VectorXd> terms0(base.terms.data(), kObjectiveTerms);
   SampleOut out;
+  SplineState S;
   for (int i = 0; i < n; ++i) {
-    const int row = i % 16, order = i / 16;
+    const int row = i % 16;
     if (row < 12 && row / 6 == d.ik_leg) continue;  // set by the inverse kinematics
-    SplineState S = S0;
-    const double h = kStep * std::max(1.0, std::abs(S0(row, order)));
-    S(row, order) += h;
+    const double h = perturbed(S0, i, S);
     sampleRows(w, k, out, &S);
     d.ineq.col(i) = (out.ineq - base.ineq) / h;
     d.eq.col(i) = (out.eq - base.eq) / h;
@@ -88,11 +97,9 @@ void OverstepProblem::Impl::eventSensitivity(Workspace& w, int e, Sensitivity& d
   d.eq.setZero(base.size(), n);
   const SplineState S0 = splineState(w, t);
   Eigen::VectorXd out;
+  SplineState S;
   for (int i = 0; i < n; ++i) {
-    const int row = i % 16, order = i / 16;
-    SplineState S = S0;
-    const double h = kStep * std::max(1.0, std::abs(S0(row, order)));
-    S(row, order) += h;
+    const double h = perturbed(S0, i, S);
     eventRows(w, e, out, &S);
     d.eq.col(i) = (out - base) / h;
   }
