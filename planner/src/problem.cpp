@@ -8,7 +8,7 @@ const char* familyName(Family f) {
   static const char* names[] = {"cop",       "friction",       "unilateral", "clearance",
                                 "obstacle",  "self_collision", "pelvis",     "joint_limits",
                                 "velocity",  "torque",         "reach",      "dynamics",
-                                "switching", "lift_off"};
+                                "switching", "lift_off",       "touchdown"};
   return names[static_cast<int>(f)];
 }
 

@@ -133,14 +133,13 @@ struct OverstepProblem::Impl : ProblemModel {
     // Grid and row layout.
     // Single-support phases are sampled on their closed interval (s = 0 .. 1): the stance ankle
     // obeys its dynamics right up to touchdown (without the s = 1 sample its residual reached
-    // 10 N m in the last 85 ms; measured with overstep check). Double-support phases end at a
-    // lift-off, where every contact row of the unloading foot degenerates (F = 0): they stop one
-    // sample short (the lift-off event rows hold there), except the final phase.
+    // 10 N m in the last 85 ms; measured with overstep check). A double-support phase that ends
+    // with a lift-off stops one sample short of it, and one that starts with a touchdown starts
+    // one sample after it: every contact row of the switching foot degenerates there (F = 0),
+    // and the switch rows hold its wrench at zero instead (switch_wrench.cpp).
     for (int i = 0; i < kPhaseCount; ++i) {
       const int nph = cfg.samples_per_phase[static_cast<std::size_t>(i)];
-      const auto& ph = phaseTable()[static_cast<std::size_t>(i)];
-      const bool closed = !(ph.right_contact && ph.left_contact) || i + 1 == kPhaseCount;
-      for (int k = 0; k <= (closed ? nph : nph - 1); ++k)
+      for (int k = firstSample(i); k <= lastSample(i); ++k)
         grid.push_back({i, static_cast<double>(k) / nph, 0.0});
     }
     n_regular = static_cast<int>(grid.size());
@@ -320,8 +319,7 @@ struct OverstepProblem::Impl : ProblemModel {
     st.tau = m.inverseDynamics();
     st.W_O = m.contactWrenchFromBase(st.tau);
     for (int f = 0; f < 2; ++f) st.sole[f] = m.framePose(sole_frame[f]);
-    st.lifting = liftingFoot(phase);
-    st.lift_weight = liftWeight(w, phase, t);
+    for (int f = 0; f < 2; ++f) st.share[f] = shareFactor(w, phase, t, f);
     distributeWrench(w);
     contactTorques(w);
   }
@@ -422,8 +420,7 @@ struct OverstepProblem::Impl : ProblemModel {
     st.tau = m.inverseDynamics();
     st.W_O = m.contactWrenchFromBase(st.tau);
     for (int f = 0; f < 2; ++f) st.sole[f] = m.framePose(sole_frame[f]);
-    st.lifting = liftingFoot(phase);
-    st.lift_weight = liftWeight(w, phase, t);
+    for (int f = 0; f < 2; ++f) st.share[f] = shareFactor(w, phase, t, f);
     distributeWrench(w);
     contactTorques(w);
   }
@@ -615,17 +612,19 @@ struct OverstepProblem::Impl : ProblemModel {
     }
   }
 
-  /// The lifting foot's share factor in a double support that ends with a lift-off: (1 - s) + a
-  /// floor, s the phase fraction; 1 otherwise. It is fixed at each sample (s does not depend on
-  /// the variables), so the split stays smooth in them. Only in the homotopy's last stage, like
-  /// the tight lift-off rows: from the first stage on, the 5 cm stage took 286 SLSQP iterations
-  /// instead of 56 and the 20 cm run reached its 20 cm stage after 394 s instead of 127 s
-  /// (measured).
-  double liftWeight(const Workspace& w, int phase, double t) const {
-    if (liftingFoot(phase) < 0 || !last_stage) return 1.0;
+  /// Foot f's share factor in double-support `phase` (s its fraction, fixed at each sample, so
+  /// the split stays smooth in the variables): (1 - s) + a floor for a foot that lifts off at the
+  /// phase's end, s + the floor for one that touched down at its start, 1 otherwise. The load of
+  /// a foot ramps out before its lift-off and in after its touchdown, where the switch rows hold
+  /// its wrench at zero. Only in the homotopy's last stage, like the tight switch rows: from the
+  /// first stage on, the lift-off's ramp took the 5 cm stage 286 SLSQP iterations instead of 56
+  /// and the 20 cm run reached its 20 cm stage after 394 s instead of 127 s (measured).
+  double shareFactor(const Workspace& w, int phase, double t, int f) const {
+    const bool lifts = liftingFoot(phase) == f, lands = landingFoot(phase) == f;
+    if (!(lifts || lands) || !last_stage) return 1.0;
     const double s =
         std::clamp((t - w.timing->start(phase)) / w.timing->durations()(phase), 0.0, 1.0);
-    return (1.0 - s) + kLiftWeightFloor;
+    return (lifts ? 1.0 - s : s) + kLiftWeightFloor;
   }
 
   /// One weighted pass of distributeWrench: the wrenches z = [m_R f_R m_L f_L] minimising
@@ -715,8 +714,7 @@ struct OverstepProblem::Impl : ProblemModel {
       z = distributePass(A, b, rho, st);
       for (int f = 0; f < 2; ++f) {
         const double fz = st.sole[f].linear().col(2).dot(z.segment<3>(6 * f + 3)) / mg;
-        rho(f) = 0.5 * (fz + std::sqrt(fz * fz + kLoadFloor * kLoadFloor)) *
-                 (f == st.lifting ? st.lift_weight : 1.0);
+        rho(f) = 0.5 * (fz + std::sqrt(fz * fz + kLoadFloor * kLoadFloor)) * st.share[f];
       }
     }
     st.wrench[kRight] = z.head<6>();
@@ -833,8 +831,8 @@ struct OverstepProblem::Impl : ProblemModel {
   }
 
   /// Mesh refinement: each point joins the grid after the regular points (rows only, no
-  /// objective weight; termRows). A double support that ends in a lift-off keeps its points before
-  /// it (its contact rows degenerate there; the lift-off event rows hold at the switch).
+  /// objective weight; termRows). A double support keeps its points off a lift-off at its end and
+  /// a touchdown at its start (its contact rows degenerate there; the switch rows hold there).
   void addCheckPoints(std::vector<GridPoint> extra) {
     std::sort(extra.begin(), extra.end(), [](const GridPoint& a, const GridPoint& b) {
       return a.phase != b.phase ? a.phase < b.phase : a.s < b.s;
@@ -843,9 +841,8 @@ struct OverstepProblem::Impl : ProblemModel {
       if (g.phase < 0 || g.phase >= kPhaseCount || !(g.s >= 0.0 && g.s <= 1.0))
         throw InputError("planner: check point outside the phases (phase " +
                          std::to_string(g.phase) + ", s " + std::to_string(g.s) + ")");
-      const auto& ph = phaseTable()[static_cast<std::size_t>(g.phase)];
-      if (ph.right_contact && ph.left_contact && g.phase + 1 < kPhaseCount)
-        g.s = std::min(g.s, 1.0 - 1e-3);
+      if (liftingFoot(g.phase) >= 0) g.s = std::min(g.s, 1.0 - 1e-3);
+      if (landingFoot(g.phase) >= 0) g.s = std::max(g.s, 1e-3);
       g.t = 0.0;
       g.refinement = true;
       const bool near = std::any_of(grid.begin(), grid.end(), [&](const GridPoint& o) {
@@ -891,15 +888,26 @@ struct OverstepProblem::Impl : ProblemModel {
                           Eigen::VectorXd& grad, Eigen::MatrixXd& jin, Eigen::MatrixXd& jeq) const;
 
   // -------------------------------------------------------------- assembly
-  /// Trapezoid quadrature weight of grid point k within its phase.
+  /// The first and the last sample index (of samples_per_phase) of a phase on the grid: a double
+  /// support skips the instant of a lift-off at its end and of a touchdown at its start.
+  int firstSample(int phase) const { return landingFoot(phase) >= 0 ? 1 : 0; }
+  int lastSample(int phase) const {
+    const int n = cfg.samples_per_phase[static_cast<std::size_t>(phase)];
+    return liftingFoot(phase) >= 0 ? n - 1 : n;
+  }
+
+  /// Quadrature weight of regular grid point k within its phase: the trapezoid rule over the
+  /// phase's samples, and a skipped switch instant's interval to the sample next to it.
   double sampleWeight(const Workspace& w, int k) const {
     const GridPoint& g = grid[static_cast<std::size_t>(k)];
-    const double h =
-        w.timing->durations()(g.phase) / cfg.samples_per_phase[static_cast<std::size_t>(g.phase)];
-    const auto& ph = phaseTable()[static_cast<std::size_t>(g.phase)];
-    const bool closed = !(ph.right_contact && ph.left_contact) || g.phase + 1 == kPhaseCount;
-    if (g.s == 1.0 || (g.s == 0.0 && closed)) return 0.5 * h;
-    return h;
+    const int n = cfg.samples_per_phase[static_cast<std::size_t>(g.phase)];
+    const double h = w.timing->durations()(g.phase) / n;
+    const int i = static_cast<int>(std::lround(g.s * n));
+    const int lo = firstSample(g.phase), hi = lastSample(g.phase);
+    double wk = (i == lo || i == hi) ? 0.5 * h : h;
+    if (i == lo && lo > 0) wk += h;
+    if (i == hi && hi < n) wk += h;
+    return wk;
   }
 
   double objective(const Workspace& w, const std::vector<const SampleOut*>& s,

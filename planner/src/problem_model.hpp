@@ -40,11 +40,12 @@ inline constexpr double kKsSharpness = 40.0;
 inline constexpr double kPolishResidual = 0.1;
 inline constexpr double kPolishCop = 1e-3;
 inline constexpr double kPolishDeflection = 2e-3;
-// Lift-off rows: scale of the lifting foot's normal-force row, a fraction of the weight.
+// Lift-off and touchdown rows: scale of the unloaded foot's normal-force row, a fraction of the
+// weight.
 inline constexpr double kLiftOffNormal = 0.03;
 // Double-support wrench split (distributeWrench).
 inline constexpr double kLoadFloor = 0.02;        // softness of the load share at zero force
-inline constexpr double kLiftWeightFloor = 1e-3;  // lifting foot's share factor at lift-off
+inline constexpr double kLiftWeightFloor = 1e-3;  // a foot's share factor at its contact switch
 
 /// Smooth maximum of values (KS), used to aggregate limit ratios into one row.
 inline double smoothMax(const Eigen::VectorXd& v, double rho) {
@@ -107,10 +108,11 @@ struct State {
   Eigen::MatrixXd J_sole[2];
   core::Vector6d W_O;  // total contact wrench about the world origin
   double ik_error = 0.0;
-  double reach = 0.0;        // hip-ankle distance of the IK leg
-  double ds_balance = 0.0;   // DS: unreachable ankle-moment balance about the feet's line, N m
-  int lifting = -1;          // DS before a lift-off: the lifting foot
-  double lift_weight = 1.0;  // and its share factor (1 - s) + eps
+  double reach = 0.0;       // hip-ankle distance of the IK leg
+  double ds_balance = 0.0;  // DS: unreachable ankle-moment balance about the feet's line, N m
+  /// Each foot's share factor in the double-support split (distributeWrench): 1, ramped for a
+  /// foot that lifts off at the phase's end or touched down at its start (shareFactor).
+  double share[2] = {1.0, 1.0};
   robots::Vector6d ik_leg = robots::Vector6d::Zero();  // DS: the IK leg's joints (chain order)
   double ik_seed_gap = 0.0;                            // DS: |IK leg - its spline|^2, rad^2
 };
@@ -129,7 +131,7 @@ struct ProblemModel {
   double height = 0.2;
   double cop_box = 0.01;
   /// The homotopy's last stage (the target problem): the lift-off rows at the check's scale, the
-  /// pelvis at pelvis_margin and the lifting foot's load share ramped (liftWeight).
+  /// pelvis at pelvis_margin and the switching feet's load shares ramped (shareFactor).
   bool last_stage = true;
   VariableLayout lay;
   int n_ctrl = 0;       // control points per leg joint curve
@@ -171,6 +173,8 @@ struct ProblemModel {
 
   /// The foot that lifts at the end of double-support `phase` (-1: none).
   static int liftingFoot(int phase) { return phase == 0 ? kRight : phase == 2 ? kLeft : -1; }
+  /// The foot that touched down at the start of double-support `phase` (-1: none).
+  static int landingFoot(int phase) { return phase == 2 ? kRight : phase == 4 ? kLeft : -1; }
   static bool inContact(int phase, int foot) {
     const auto& ph = phaseTable()[static_cast<std::size_t>(phase)];
     return foot == kRight ? ph.right_contact : ph.left_contact;

@@ -121,6 +121,35 @@ TEST(PlanCli, SmallObstaclePlansWithTheDefaultBoxAndPassesCheck) {
         "solve_time", "iterations", "objective_terms", "max_violation", "check", "file"})
     EXPECT_TRUE(summary.contains(key)) << key;
   EXPECT_TRUE(summary["valid"].get<bool>());
+  {
+    // The contact forces are continuous across every switch: a foot's normal force is zero at
+    // its lift-off and at its touchdown, the instants where it leaves and joins the contacts
+    // (the plan's first sample with a foot newly in contact, the last before it leaves).
+    const auto file = nlohmann::json::parse(test::slurp(plan));
+    const auto& s = file.at("samples");
+    const auto& t = s.at("t");
+    const auto& phases = file.at("phases");
+    ASSERT_EQ(s.at("phase").size(), t.size());
+    const char* wrench[2] = {"right_wrench", "left_wrench"};
+    const char* contact[2] = {"right_contact", "left_contact"};
+    auto fz = [&](int f, std::size_t i) { return s.at(wrench[f])[i][2].get<double>(); };
+    const double weight = fz(0, 0) + fz(1, 0);  // standing still at the start
+    int switches = 0;
+    for (std::size_t p = 1; p < phases.size(); ++p)
+      for (int f = 0; f < 2; ++f) {
+        const bool before = phases[p - 1].at(contact[f]), after = phases[p].at(contact[f]);
+        if (before == after) continue;
+        // A touchdown: phase p's first sample; a lift-off: phase p - 1's last.
+        std::size_t i = 0;
+        while (i < t.size() && s.at("phase")[i].get<std::size_t>() < p) ++i;
+        if (!after) --i;
+        EXPECT_LT(std::abs(fz(f, i)), 0.02 * weight)
+            << wrench[f] << (after ? " at its touchdown, t = " : " at its lift-off, t = ")
+            << t[i].get<double>();
+        ++switches;
+      }
+    EXPECT_EQ(switches, 4);
+  }
   // The time split accounts for the whole solve, every part non-negative; the Jacobians and
   // NLopt's own work are each measured (their shares are benchmark figures, not asserted).
   ASSERT_TRUE(summary.contains("time_split"));

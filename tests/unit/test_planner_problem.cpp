@@ -355,17 +355,22 @@ TEST_F(Problem, LayoutAndRowFamiliesAreConsistent) {
 
 // The row layout follows from the terms: count each family's rows against the phase table and
 // the sample grid (single-support phases sampled on their closed interval, double-support ones
-// one sample short of their end, the last phase closed).
+// without the instant of a switch: one sample short of a lift-off at their end and one sample
+// after a touchdown at their start).
 TEST_F(Problem, RowLayoutFollowsThePhasesAndSamples) {
   const PlannerConfig cfg;
   int contacts = 0, ss = 0, ds = 0;
-  for (int i = 0; i < kPhaseCount; ++i) {
+  auto two = [](int i) {
     const auto& ph = phaseTable()[static_cast<std::size_t>(i)];
-    const bool two = ph.right_contact && ph.left_contact;
-    const int n =
-        cfg.samples_per_phase[static_cast<std::size_t>(i)] + (!two || i + 1 == kPhaseCount ? 1 : 0);
-    contacts += n * (two ? 2 : 1);
-    (two ? ds : ss) += n;
+    return ph.right_contact && ph.left_contact;
+  };
+  for (int i = 0; i < kPhaseCount; ++i) {
+    const bool touchdown = two(i) && i > 0 && !two(i - 1);
+    const bool lift_off = two(i) && i + 1 < kPhaseCount && !two(i + 1);
+    const int n = cfg.samples_per_phase[static_cast<std::size_t>(i)] + 1 - (touchdown ? 1 : 0) -
+                  (lift_off ? 1 : 0);
+    contacts += n * (two(i) ? 2 : 1);
+    (two(i) ? ds : ss) += n;
   }
   auto count = [](const std::vector<Family>& fams, Family f) {
     return static_cast<int>(std::count(fams.begin(), fams.end(), f));
@@ -385,6 +390,7 @@ TEST_F(Problem, RowLayoutFollowsThePhasesAndSamples) {
   EXPECT_EQ(count(eq, Family::Dynamics), 4 * ss);
   EXPECT_EQ(count(eq, Family::Switching), 4 * 12);
   EXPECT_EQ(count(eq, Family::LiftOff), 2 * 3);
+  EXPECT_EQ(count(eq, Family::Touchdown), 2 * 3);
   // Each row's family is the one describeRow names.
   for (int r = 0; r < problem_->inequalityCount(); r += 97)
     EXPECT_EQ(
@@ -545,15 +551,21 @@ TEST_F(Problem, DerivativesMatchFineCentralDifferences) {
 TEST_F(Problem, CheckPointsAddRowsButLeaveTheObjective) {
   core::ObstacleSpec ob;
   ob.height = 0.05;
+  const double first = 1.0 / PlannerConfig{}.samples_per_phase[2];  // the transfer's first sample
   const std::vector<GridPoint> pts = {
       {1, 0.37, 0.0},    // right swing
       {1, 0.3704, 0.0},  // within 1e-3 of the first: dropped
-      {2, 0.0, 0.0},     // the transfer's first sample: dropped
+      {2, first, 0.0},   // a sample of the transfer: dropped
       {2, 0.97, 0.0}};   // late in the transfer, after its last sample
   OverstepProblem refined(*model_, PlannerConfig{}, ob, pts);
   ASSERT_EQ(refined.checkPoints().size(), 2u);
   EXPECT_EQ(refined.checkPoints()[0].phase, 1);
   EXPECT_EQ(refined.checkPoints()[1].phase, 2);
+  // The transfer's switch instants are off its grid: points there move just inside it.
+  const OverstepProblem ends(*model_, PlannerConfig{}, ob, {{2, 0.0, 0.0}, {2, 1.0, 0.0}});
+  ASSERT_EQ(ends.checkPoints().size(), 2u);
+  EXPECT_GT(ends.checkPoints()[0].s, 0.0);
+  EXPECT_LT(ends.checkPoints()[1].s, 1.0);
   EXPECT_GT(refined.inequalityCount(), problem_->inequalityCount());
   EXPECT_EQ(refined.equalityCount(), problem_->equalityCount());  // no elastic collocation
   const auto& fam = refined.inequalityFamilies();

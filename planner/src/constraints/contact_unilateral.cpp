@@ -1,5 +1,6 @@
 // A stance foot pushes: f_z >= min_normal_force, which an unloading foot ramps to zero over its
-// double-support phase (the lift-off rows take it to zero at the switch). Scale: the weight (N).
+// double-support phase and a landing foot ramps up from zero over its own (the switch rows hold
+// it at zero at the lift-off and at the touchdown). Scale: the weight (N).
 // One row per foot in contact.
 #include "row_term.hpp"
 
@@ -17,7 +18,8 @@ class ContactUnilateral final : public SampleTerm {
     Eigen::Vector3d mo, fo;
     soleWrench(*d.st, foot_, mo, fo);
     double fmin = p.cfg.min_normal_force;
-    if (foot_ == ProblemModel::liftingFoot(d.g->phase)) fmin *= (1.0 - d.g->s);
+    if (foot_ == ProblemModel::liftingFoot(d.g->phase)) fmin *= 1.0 - d.g->s;
+    if (foot_ == ProblemModel::landingFoot(d.g->phase)) fmin *= d.g->s;
     out[0] = (fmin - fo.z()) / p.mg;
   }
 

@@ -79,6 +79,7 @@ std::unique_ptr<SampleTerm> makeSwayBalance();
 std::unique_ptr<SampleTerm> makeElasticDynamics();
 std::unique_ptr<EventTerm> makeSwitching();
 std::unique_ptr<EventTerm> makeLiftOff();
+std::unique_ptr<EventTerm> makeTouchdown();
 
 /// The sample terms in stacking order (contact rows of the right foot, then the left, then the
 /// rest), and the switch terms.

@@ -27,6 +27,7 @@ std::vector<std::unique_ptr<EventTerm>> eventTerms() {
   std::vector<std::unique_ptr<EventTerm>> t;
   t.push_back(makeSwitching());
   t.push_back(makeLiftOff());
+  t.push_back(makeTouchdown());
   return t;
 }
 

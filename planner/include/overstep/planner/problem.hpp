@@ -52,6 +52,7 @@ enum class Family {
   Dynamics,
   Switching,
   LiftOff,
+  Touchdown,
   kCount
 };
 const char* familyName(Family f);
