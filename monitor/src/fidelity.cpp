@@ -99,18 +99,24 @@ double peakTouchdownLoad(const RunSeries& run, const FootSeries& f,
   return peak / run.weight;
 }
 
-/// The first measured contact around each planned touchdown against it (see FootFidelity).
+/// The first measured contact around each planned touchdown against the plan's own (see
+/// FootFidelity).
 double touchdownTiming(const RunSeries& run, const FootSeries& f,
                        const std::vector<double>& touchdowns, const FidelityParams& p) {
+  const double level = p.contact_on * run.weight;
+  // The first tick in the touchdown's window whose series is above the contact level.
+  auto first = [&](const std::vector<double>& fz, double td, double from) {
+    for (std::size_t i = 0; i < run.size(); ++i)
+      if (run.t[i] >= from && run.t[i] <= td + p.touchdown_after && fz[i] > level) return run.t[i];
+    return kNaN;
+  };
   double worst = kNaN;
   for (double td : touchdowns) {
-    double first = kNaN;
-    for (std::size_t i = 0; i < run.size() && std::isnan(first); ++i)
-      if (run.t[i] >= td - p.touchdown_before && run.t[i] <= td + p.touchdown_after &&
-          f.fz_meas[i] > p.contact_on * run.weight)
-        first = run.t[i] - td;
-    if (std::isnan(first)) return kNaN;  // never landed in the window: a contact loss already
-    if (std::isnan(worst) || std::abs(first) > std::abs(worst)) worst = first;
+    const double measured = first(f.fz_meas, td, td - p.touchdown_before);
+    if (std::isnan(measured)) return kNaN;  // never landed in the window: a contact loss already
+    const double planned = first(f.fz_plan, td, td);  // a plan that ramps its load in
+    const double timing = measured - (std::isnan(planned) ? td : planned);
+    if (std::isnan(worst) || std::abs(timing) > std::abs(worst)) worst = timing;
   }
   return worst;
 }

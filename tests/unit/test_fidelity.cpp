@@ -4,6 +4,7 @@
 // band, the settling of a decaying base speed.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -114,6 +115,19 @@ TEST(Fidelity, ABounceAfterTouchdownIsAContactLossAndAShortDipIsNot) {
   EXPECT_NEAR(computeFidelity(late).foot[0].touchdown_timing, 0.09, kDt / 2);
   EXPECT_EQ(computeFidelity(late).foot[0].contact_losses, 0);
   EXPECT_NEAR(computeFidelity(dip).foot[0].touchdown_timing, 0.0, kDt / 2);
+  // A plan that ramps the landing foot's load in (0 -> 100 % over 0.2 s): the timing is against
+  // the plan's own first load above the contact level (5 % of the weight, at 20 ms), so a foot
+  // that follows the ramp 15 ms behind it is 15 ms late, not 35.
+  RunSeries ramp = standing(3.0, 1.0);
+  swingRight(ramp, 1.0, 2.0);
+  for (std::size_t i = 0; i < ramp.size(); ++i) {
+    const double s = std::clamp((ramp.t[i] - 2.0) / 0.2, 0.0, 1.0);
+    const double s_meas = std::clamp((ramp.t[i] - 2.015) / 0.2, 0.0, 1.0);
+    if (ramp.t[i] < 2.0) continue;
+    ramp.foot[0].fz_plan[i] = 0.5 * kWeight * s;
+    ramp.foot[0].fz_meas[i] = 0.5 * kWeight * s_meas;
+  }
+  EXPECT_NEAR(computeFidelity(ramp).foot[0].touchdown_timing, 0.015, kDt);
   // Never lands while the plan has it down: a loss.
   RunSeries never = standing(3.0, 1.0);
   swingRight(never, 1.0, 2.0);

@@ -60,8 +60,10 @@ struct FootFidelity {
   int touchdowns = 0;      ///< planned touchdowns in the run
   int contact_losses = 0;  ///< planned-contact intervals left (or never reached) by the foot
   double peak_touchdown_load = 0.0;  ///< largest Fz around a touchdown / weight (NaN: none)
-  /// s, measured first contact (Fz above contact_on) minus the planned touchdown, the largest in
-  /// magnitude over the foot's touchdowns (signed: < 0 early; NaN: none, or never landed)
+  /// s, measured first contact (Fz above contact_on) minus the plan's (its first load above the
+  /// same level after the touchdown, which a plan that ramps the landing foot's load in reaches
+  /// after the touchdown instant), the largest in magnitude over the foot's touchdowns (signed:
+  /// < 0 early; NaN: none, or never landed)
   double touchdown_timing = 0.0;
   double cop_p50 = 0.0, cop_p95 = 0.0, cop_max = 0.0;  ///< m, |CoP_meas - CoP_plan|
   int cop_samples = 0;                                 ///< ticks where both load the foot
