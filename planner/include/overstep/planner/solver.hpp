@@ -90,9 +90,10 @@ struct RestorationResult {
 /// plan's 1 kHz check); true: good enough to stop at.
 using AcceptFn = std::function<bool(const Eigen::VectorXd&)>;
 
-/// What a restoration is for. Polish: a feasible point to end a stage at; it aims at a tenth of
+/// What a restoration is for. Polish: a feasible point to end the plan at; it aims at a tenth of
 /// kFeasibilityTolerance and gives up only far from it. Project: the start of a stage solve, which
-/// SLSQP takes from any point near the feasible set; it ends at the tolerance, or once it crawls.
+/// SLSQP takes from any point near the feasible set, or the end of an intermediate stage; it ends
+/// at the tolerance, or once it crawls.
 /// Probe: a Project that also ends once it crawls far from the feasible set (above 1, scaled),
 /// for a caller with another start to try (the planner's guess).
 enum class RestorationGoal { Polish, Project, Probe };
