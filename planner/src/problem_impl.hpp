@@ -624,7 +624,7 @@ struct OverstepProblem::Impl : ProblemModel {
     if (!(lifts || lands) || !last_stage) return 1.0;
     const double s =
         std::clamp((t - w.timing->start(phase)) / w.timing->durations()(phase), 0.0, 1.0);
-    return (lifts ? 1.0 - s : s) + kLiftWeightFloor;
+    return (lifts ? 1.0 - s : s) + kShareFloor;
   }
 
   /// One weighted pass of distributeWrench: the wrenches z = [m_R f_R m_L f_L] minimising

@@ -44,8 +44,8 @@ inline constexpr double kPolishDeflection = 2e-3;
 // weight.
 inline constexpr double kLiftOffNormal = 0.03;
 // Double-support wrench split (distributeWrench).
-inline constexpr double kLoadFloor = 0.02;        // softness of the load share at zero force
-inline constexpr double kLiftWeightFloor = 1e-3;  // a foot's share factor at its contact switch
+inline constexpr double kLoadFloor = 0.02;   // softness of the load share at zero force
+inline constexpr double kShareFloor = 1e-3;  // a foot's share factor at its contact switch
 
 /// Smooth maximum of values (KS), used to aggregate limit ratios into one row.
 inline double smoothMax(const Eigen::VectorXd& v, double rho) {
