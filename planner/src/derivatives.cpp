@@ -52,8 +52,9 @@ double perturbed(const SplineState& S0, int i, SplineState& S) {
   return h;
 }
 
-/// Column `row` of the spline values' sensitivities, chained with a control point's coefficients.
-Eigen::VectorXd chain(const Eigen::MatrixXd& D, int row, const Eigen::Vector3d& coef) {
+/// Column `row` of the spline values' sensitivities, chained with a control point's coefficients
+/// (an expression over D, evaluated where it is assigned).
+auto chain(const Eigen::MatrixXd& D, int row, const Eigen::Vector3d& coef) {
   return D.col(row) * coef(0) + D.col(16 + row) * coef(1) + D.col(32 + row) * coef(2);
 }
 
@@ -172,7 +173,7 @@ void OverstepProblem::Impl::controlPointColumn(const Workspace& w, const Eigen::
     SampleOut& ch = c.changed[k];
     ch.t = base.t;
     ch.tau = base.tau + hj * chain(d.tau, row, coef);
-    const Eigen::VectorXd dterms = chain(d.terms, row, coef);
+    const auto dterms = chain(d.terms, row, coef);
     for (int i = 0; i < kObjectiveTerms; ++i)
       ch.terms[static_cast<std::size_t>(i)] =
           base.terms[static_cast<std::size_t>(i)] + hj * dterms(i);

@@ -266,12 +266,12 @@ struct OverstepProblem::Impl : ProblemModel {
     const PhaseSpline::Basis bf = w.flex_spline->evaluate(t);
     const auto legs = w.legs_c.middleCols(b.first, static_cast<int>(b.value.size()));
     const auto flex = w.flex_c.middleCols(bf.first, static_cast<int>(bf.value.size()));
-    S.block<12, 1>(0, 0) = legs * b.value;
-    S.block<12, 1>(0, 1) = legs * b.d1;
-    S.block<12, 1>(0, 2) = legs * b.d2;
-    S.block<4, 1>(12, 0) = flex * bf.value;
-    S.block<4, 1>(12, 1) = flex * bf.d1;
-    S.block<4, 1>(12, 2) = flex * bf.d2;
+    S.block<12, 1>(0, 0).noalias() = legs * b.value;
+    S.block<12, 1>(0, 1).noalias() = legs * b.d1;
+    S.block<12, 1>(0, 2).noalias() = legs * b.d2;
+    S.block<4, 1>(12, 0).noalias() = flex * bf.value;
+    S.block<4, 1>(12, 1).noalias() = flex * bf.d1;
+    S.block<4, 1>(12, 2).noalias() = flex * bf.d2;
     return S;
   }
 
@@ -315,8 +315,8 @@ struct OverstepProblem::Impl : ProblemModel {
         st.ik_leg(j) = st.q(leg_coord[static_cast<std::size_t>(6 * other + j)]);
       st.ik_seed_gap = seedGap(st.ik_leg, seed);
     }
-    st.J_sole[anchor] = m.frameJacobian(sole_frame[anchor]);  // the other's: solveOtherLeg
-    st.tau = m.inverseDynamics();
+    m.frameJacobian(sole_frame[anchor], st.J_sole[anchor]);  // the other's: solveOtherLeg
+    m.inverseDynamics(st.tau);
     st.W_O = m.contactWrenchFromBase(st.tau);
     for (int f = 0; f < 2; ++f) st.sole[f] = m.framePose(sole_frame[f]);
     for (int f = 0; f < 2; ++f) st.share[f] = shareFactor(w, phase, t, f);
@@ -330,7 +330,8 @@ struct OverstepProblem::Impl : ProblemModel {
   /// the Jacobians; a foot out of contact carries no wrench).
   void contactTorques(Workspace& w) const {
     State& st = w.st;
-    Eigen::VectorXd tau = st.tau;
+    Eigen::VectorXd& tau = st.tau_contact;
+    tau = st.tau;
     for (int f = 0; f < 2; ++f)
       if (st.contact[f]) tau.noalias() -= st.J_sole[f].transpose() * st.wrench[f];
     st.tau_act = tau.segment(6, model_template.actuatedCount());
@@ -339,7 +340,7 @@ struct OverstepProblem::Impl : ProblemModel {
   /// st.J_sole of the feet in contact at the model's current positions.
   void soleJacobians(Workspace& w) const {
     for (int f = 0; f < 2; ++f)
-      if (w.st.contact[f]) w.st.J_sole[f] = w.model->frameJacobian(sole_frame[f]);
+      if (w.st.contact[f]) w.model->frameJacobian(sole_frame[f], w.st.J_sole[f]);
   }
 
   /// Closed-form inverse kinematics of leg `leg` (robots::LegIk) putting its sole frame at X_WS,
@@ -371,7 +372,7 @@ struct OverstepProblem::Impl : ProblemModel {
     for (int j = 0; j < 6; ++j) st.q(cols[j]) = ik.q(j);
     m.setPositions(st.q);
     st.ik_error = poseError(target, m.framePose(f)).norm();
-    st.J_sole[leg] = m.frameJacobian(f);
+    m.frameJacobian(f, st.J_sole[leg]);
     const Eigen::MatrixXd& Jf = st.J_sole[leg];
     for (int j = 0; j < 6; ++j) J.col(j) = Jf.col(cols[j]);
     // The leg is singular only when stretched beyond reach (a point the reach row rejects, met
@@ -417,7 +418,7 @@ struct OverstepProblem::Impl : ProblemModel {
     st.contact[kLeft] = ph.left_contact;
     m.setState(q, v, a);
     soleJacobians(w);
-    st.tau = m.inverseDynamics();
+    m.inverseDynamics(st.tau);
     st.W_O = m.contactWrenchFromBase(st.tau);
     for (int f = 0; f < 2; ++f) st.sole[f] = m.framePose(sole_frame[f]);
     for (int f = 0; f < 2; ++f) st.share[f] = shareFactor(w, phase, t, f);

@@ -48,7 +48,7 @@ inline constexpr double kLoadFloor = 0.02;   // softness of the load share at ze
 inline constexpr double kShareFloor = 1e-3;  // a foot's share factor at its contact switch
 
 /// Smooth maximum of values (KS), used to aggregate limit ratios into one row.
-inline double smoothMax(const Eigen::VectorXd& v, double rho) {
+inline double smoothMax(const Eigen::Ref<const Eigen::VectorXd>& v, double rho) {
   const double m = v.maxCoeff();
   return m + std::log((rho * (v.array() - m)).exp().sum()) / rho;
 }
@@ -99,6 +99,7 @@ struct SampleOut {
 struct State {
   Eigen::VectorXd q, v, a, tau;  // tau: inverse dynamics without contacts (all coordinates)
   Eigen::VectorXd tau_act;       // actuator torques of the robot in contact (seed eq. 1)
+  Eigen::VectorXd tau_contact;   // scratch: all coordinates of tau minus the feet's J^T w
   core::Vector6d wrench[2];      // [torque; force] about each sole origin, world frame
   bool contact[2] = {false, false};
   Eigen::Isometry3d sole[2];

@@ -7,7 +7,34 @@
 
 namespace overstep::planner {
 
-using SplineType = Eigen::Spline<double, 1, Eigen::Dynamic>;
+namespace {
+
+template <int Degree>
+PhaseSpline::Basis basisOf(const Eigen::Spline<double, 1, Degree>& s, double u) {
+  PhaseSpline::Basis b;
+  b.first = static_cast<int>(s.span(u)) - Degree;
+  const auto ders = s.template basisFunctionDerivatives<2>(u, 2);
+  b.value.resize(Degree + 1);
+  b.d1.resize(Degree + 1);
+  b.d2.resize(Degree + 1);
+  for (int j = 0; j <= Degree; ++j) {
+    b.value(j) = ders(0, j);
+    b.d1(j) = ders(1, j);
+    b.d2(j) = ders(2, j);
+  }
+  return b;
+}
+
+template <int Degree>
+Eigen::Spline<double, 1, Degree> splineOver(const Eigen::ArrayXd& knots) {
+  using S = Eigen::Spline<double, 1, Degree>;
+  const typename S::KnotVectorType kv = knots.transpose();
+  const typename S::ControlPointVectorType ctrl =
+      S::ControlPointVectorType::Zero(1, knots.size() - Degree - 1);
+  return S(kv, ctrl);
+}
+
+}  // namespace
 
 PhaseSpline::PhaseSpline(const std::array<int, kPhaseCount>& intervals, int degree)
     : intervals_(intervals), degree_(degree) {
@@ -30,24 +57,15 @@ void PhaseSpline::setTiming(const PhaseTiming& timing) {
   }
   t_end_ = timing.total();
   for (int r = 0; r <= degree_; ++r) knots_(k++) = t_end_;
+  if (degree_ == 3)
+    cubic_ = splineOver<3>(knots_);
+  else
+    quintic_ = splineOver<5>(knots_);
 }
 
 PhaseSpline::Basis PhaseSpline::evaluate(double t) const {
   const double u = std::clamp(t, 0.0, t_end_);
-  const SplineType::KnotVectorType kv = knots_.transpose();
-  Basis b;
-  const Eigen::DenseIndex span = SplineType::Span(u, degree_, kv);
-  b.first = static_cast<int>(span) - degree_;
-  const auto ders = SplineType::BasisFunctionDerivatives(u, 2, degree_, kv);
-  b.value.resize(degree_ + 1);
-  b.d1.resize(degree_ + 1);
-  b.d2.resize(degree_ + 1);
-  for (int j = 0; j <= degree_; ++j) {
-    b.value(j) = ders(0, j);
-    b.d1(j) = ders(1, j);
-    b.d2(j) = ders(2, j);
-  }
-  return b;
+  return degree_ == 3 ? basisOf(cubic_, u) : basisOf(quintic_, u);
 }
 
 void PhaseSpline::evaluate(const Eigen::MatrixXd& ctrl, double t, Eigen::VectorXd* x,

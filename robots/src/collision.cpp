@@ -224,18 +224,20 @@ double obstacleDistance(const Capsule& a, const ObstacleGeometry& o, Eigen::Vect
   return capsuleDistance(a, Capsule{o.centre - half, o.centre + half, o.radius}, pa, pb);
 }
 
-double smoothMin(const Eigen::VectorXd& d, double rho, Eigen::VectorXd* weights) {
+// Both as expressions: without the optional output they evaluate without allocating.
+double smoothMin(const Eigen::Ref<const Eigen::VectorXd>& d, double rho, Eigen::VectorXd* weights) {
   const double m = d.minCoeff();
-  const Eigen::ArrayXd e = (-rho * (d.array() - m)).exp();
+  const auto e = (-rho * (d.array() - m)).exp();
   const double s = e.sum();
   if (weights) *weights = e / s;
   return m - std::log(s) / rho;
 }
 
-double softMin(const Eigen::VectorXd& d, double rho, Eigen::VectorXd* gradient) {
+double softMin(const Eigen::Ref<const Eigen::VectorXd>& d, double rho, Eigen::VectorXd* gradient) {
   const double m = d.minCoeff();
-  const Eigen::ArrayXd e = (-rho * (d.array() - m)).exp();
-  const Eigen::ArrayXd w = e / e.sum();
+  const auto e = (-rho * (d.array() - m)).exp();
+  const double s = e.sum();
+  const auto w = e / s;
   const double b = (w * d.array()).sum();
   if (gradient) *gradient = (w * (1.0 - rho * (d.array() - b))).matrix();
   return b;

@@ -289,7 +289,11 @@ struct WholeBodyModel::Impl {
   SkeletonPtr skel;
   int n = 0;
   int nb = 0;
-  std::vector<int> perm;      // model index -> DART index
+  std::vector<int> perm;       // model index -> DART index
+  std::vector<int> from_dart;  // DART index -> model index
+  // Scratch for the setters and anchorBase (a model serves one thread at a time).
+  Eigen::VectorXd dart_order;
+  Eigen::MatrixXd jacobian;
   Eigen::VectorXd reflected;  // per model coordinate: rotor term (0 for base/elastic)
   Eigen::VectorXd stiffness;  // per model coordinate
   Eigen::VectorXd damping;    // per model coordinate
@@ -320,6 +324,29 @@ struct WholeBodyModel::Impl {
     Eigen::VectorXd out(n);
     for (int i = 0; i < n; ++i) out(perm[i]) = x(i);
     return out;
+  }
+  /// x in DART's order, in the scratch vector.
+  const Eigen::VectorXd& inDartOrder(const Eigen::VectorXd& x) {
+    dart_order.resize(n);
+    for (int i = 0; i < n; ++i) dart_order(perm[i]) = x(i);
+    return dart_order;
+  }
+  /// World-aligned Jacobian of a point of `body` (p_BP in the body frame) in model columns:
+  /// DART's TemplatedJacobianNode::getWorldJacobian(offset) on the body's cached Jacobian, with
+  /// the same arithmetic, written into J's columns.
+  void pointJacobian(const BodyNode* body, const Eigen::Vector3d& p_BP, Eigen::MatrixXd& J) const {
+    const dart::math::Jacobian& J_body = body->getWorldJacobian();  // 6 x dependent coordinates
+    const Eigen::Vector3d r = body->getWorldTransform().linear() * p_BP;
+    const std::vector<std::size_t>& deps = body->getDependentGenCoordIndices();
+    J.setZero(6, n);
+    for (std::size_t k = 0; k < deps.size(); ++k) {
+      const auto c = static_cast<Eigen::Index>(k);
+      const int col = from_dart[deps[k]];
+      J.col(col).head<3>() = J_body.col(c).head<3>();
+      J(3, col) = J_body(3, c) + (J_body(1, c) * r(2) - J_body(2, c) * r(1));
+      J(4, col) = J_body(4, c) + (J_body(2, c) * r(0) - J_body(0, c) * r(2));
+      J(5, col) = J_body(5, c) + (J_body(0, c) * r(1) - J_body(1, c) * r(0));
+    }
   }
   Eigen::VectorXd fromDart(const Eigen::VectorXd& x) const {
     Eigen::VectorXd out(n);
@@ -400,6 +427,8 @@ WholeBodyModel::WholeBodyModel(core::RobotDescription description)
     m.stiffness(c) = e.stiffness;
     m.damping(c) = e.damping;
   }
+  m.from_dart.assign(static_cast<std::size_t>(m.n), -1);
+  for (int i = 0; i < m.n; ++i) m.from_dart[static_cast<std::size_t>(m.perm[i])] = i;
   // A model overlay's payloads (docs/model-overlay.md).
   for (const auto& p : m.desc.effects.payloads) {
     try {
@@ -464,15 +493,18 @@ std::vector<std::string> WholeBodyModel::coordinateNames() const {
 
 void WholeBodyModel::setPositions(const Eigen::VectorXd& q) {
   impl_->checkSize(q, "positions");
-  impl_->skel->setPositions(impl_->toDart(q));
+  impl_->skel->setPositions(impl_->inDartOrder(q));
 }
 void WholeBodyModel::setVelocities(const Eigen::VectorXd& v) {
   impl_->checkSize(v, "velocities");
-  impl_->skel->setVelocities(impl_->toDart(v));
+  impl_->skel->setVelocities(impl_->inDartOrder(v));
 }
 void WholeBodyModel::setAccelerations(const Eigen::VectorXd& a) {
   impl_->checkSize(a, "accelerations");
-  impl_->skel->setAccelerations(impl_->toDart(a));
+  // Coordinate by coordinate, as MetaSkeleton::setAccelerations does (which also builds a
+  // std::string for its error message on every call).
+  for (int i = 0; i < impl_->n; ++i)
+    impl_->skel->getDof(static_cast<std::size_t>(impl_->perm[i]))->setAcceleration(a(i));
 }
 void WholeBodyModel::setState(const Eigen::VectorXd& q, const Eigen::VectorXd& v,
                               const Eigen::VectorXd& a) {
@@ -543,7 +575,8 @@ void WholeBodyModel::anchorBase(int frame, const Eigen::Isometry3d& X_WF, Eigen:
   // (DART's world transforms with the base at the identity, the same products), with the base
   // left where it is until it is set. A call whose joints and resulting base are those of the
   // previous one (e.g. only velocities or accelerations differ) leaves DART's kinematics cached.
-  q.head<6>() = impl_->skel->getRootJoint()->getPositions();
+  const dart::dynamics::Joint* root = impl_->skel->getRootJoint();
+  for (std::size_t i = 0; i < 6; ++i) q(static_cast<Eigen::Index>(i)) = root->getPosition(i);
   setPositions(q);
   const auto& f = impl_->frame(frame);
   const BodyNode* chain[64];
@@ -558,10 +591,13 @@ void WholeBodyModel::anchorBase(int frame, const Eigen::Isometry3d& X_WF, Eigen:
   X_BF = X_BF * f.X_BF;
   q.head<6>() = dart::dynamics::FreeJoint::convertToPositions(X_WF * X_BF.inverse());
   setPositions(q);
-  const Eigen::MatrixXd J = frameJacobian(frame);
+  Eigen::MatrixXd& J = impl_->jacobian;
+  frameJacobian(frame, J);
   const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> Jb(J.leftCols<6>());
   v.head<6>().setZero();
-  v.head<6>() = -Jb.solve(J * v);
+  Vector6d Jv;
+  Jv.noalias() = J * v;
+  v.head<6>() = -Jb.solve(Jv);
   a.head<6>().setZero();
   setVelocities(v);
   setAccelerations(a);
@@ -593,8 +629,14 @@ Eigen::Isometry3d WholeBodyModel::jointPose(const std::string& joint) const {
 }
 
 Eigen::MatrixXd WholeBodyModel::frameJacobian(int frame) const {
+  Eigen::MatrixXd J;
+  frameJacobian(frame, J);
+  return J;
+}
+
+void WholeBodyModel::frameJacobian(int frame, Eigen::MatrixXd& J) const {
   const auto& f = impl_->frame(frame);
-  return impl_->colsFromDart(impl_->skel->getWorldJacobian(f.body, f.X_BF.translation()));
+  impl_->pointJacobian(f.body, f.X_BF.translation(), J);
 }
 
 Vector6d WholeBodyModel::frameVelocity(int frame) const {
@@ -674,13 +716,23 @@ Eigen::VectorXd WholeBodyModel::nonlinearEffects() const {
 }
 
 Eigen::VectorXd WholeBodyModel::inverseDynamics() const {
+  Eigen::VectorXd tau;
+  inverseDynamics(tau);
+  return tau;
+}
+
+void WholeBodyModel::inverseDynamics(Eigen::VectorXd& tau) const {
   // Springs and dampers are added here, not by DART: DART's inverse dynamics evaluates the spring
   // at q + dt qdot (its implicit-integration form), which is not the model's k q.
   impl_->skel->computeInverseDynamics(false, false, false);
-  Eigen::VectorXd tau = impl_->fromDart(impl_->skel->getForces());
-  tau += impl_->reflected.cwiseProduct(accelerations()) +
-         impl_->stiffness.cwiseProduct(positions()) + impl_->damping.cwiseProduct(velocities());
-  return tau;
+  tau.resize(impl_->n);
+  for (int i = 0; i < impl_->n; ++i) {
+    const dart::dynamics::DegreeOfFreedom* dof =
+        impl_->skel->getDof(static_cast<std::size_t>(impl_->perm[i]));
+    tau(i) = dof->getForce() +
+             (impl_->reflected(i) * dof->getAcceleration() +
+              impl_->stiffness(i) * dof->getPosition() + impl_->damping(i) * dof->getVelocity());
+  }
 }
 
 Eigen::VectorXd WholeBodyModel::torquesInContact(const Eigen::VectorXd& tau_id,
@@ -696,7 +748,9 @@ Vector6d WholeBodyModel::contactWrenchFromBase(const Eigen::VectorXd& tau) const
   BodyNode* base = impl_->skel->getRootBodyNode();
   const Eigen::Vector3d origin_in_base =
       base->getWorldTransform().inverse() * Eigen::Vector3d::Zero();
-  const Eigen::MatrixXd J = impl_->skel->getWorldJacobian(base, origin_in_base);
+  // The base's world Jacobian at the world origin: its six columns are the base coordinates.
+  Eigen::MatrixXd& J = impl_->jacobian;
+  impl_->pointJacobian(base, origin_in_base, J);
   const Eigen::Matrix<double, 6, 6> Jb = J.leftCols<6>();
   return Jb.transpose().partialPivLu().solve(tau.head<6>());
 }

@@ -242,7 +242,20 @@ TEST_F(Hrp2Model, FrameJacobianMatchesFiniteDifferences) {
     const Eigen::Vector3d ang = dR.axis() * dR.angle() / (2 * eps);
     EXPECT_LT(((J * v).tail<3>() - lin).norm(), 1e-6) << frame;
     EXPECT_LT(((J * v).head<3>() - ang).norm(), 1e-6) << frame;
+    // Into a buffer (the planner's allocation-free form): every entry written, NaN-prefilled
+    // buffers of the right size and of another size alike.
+    model_->setState(q, v, a);
+    for (const Eigen::Index cols : {Eigen::Index(model_->dofs()), Eigen::Index(3)}) {
+      Eigen::MatrixXd Jb = Eigen::MatrixXd::Constant(6, cols, std::nan(""));
+      model_->frameJacobian(f, Jb);
+      ASSERT_EQ(Jb.cols(), model_->dofs());
+      EXPECT_TRUE(Jb.allFinite()) << frame;
+      EXPECT_EQ((Jb - J).cwiseAbs().maxCoeff(), 0.0) << frame;
+    }
   }
+  VectorXd tau = VectorXd::Constant(model_->dofs(), std::nan(""));
+  model_->inverseDynamics(tau);
+  EXPECT_EQ((tau - model_->inverseDynamics()).cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST_F(Hrp2Model, SpringTermOfElasticAnkle) {

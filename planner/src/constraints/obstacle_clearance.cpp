@@ -12,7 +12,7 @@ class ObstacleClearance final : public SampleTerm {
   Family family() const override { return Family::ObstacleCollision; }
   int rows(const ProblemModel&, const GridPoint&) const override { return 1; }
   void evaluate(const ProblemModel& p, const SampleData& d, double* out) const override {
-    Eigen::VectorXd dist(static_cast<Eigen::Index>(p.leg_caps[0].size() + p.leg_caps[1].size()));
+    auto dist = d.scratch(static_cast<Eigen::Index>(p.leg_caps[0].size() + p.leg_caps[1].size()));
     Eigen::Index i = 0;
     // The homotopy raises the bar under a swinging leg only: a leg on the ground never passes
     // over it, and against the target bar from the first stage on its posture need not change

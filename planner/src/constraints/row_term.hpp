@@ -25,6 +25,14 @@ struct SampleData {
   /// How far each capsule can travel before the nearer sample (m; swept clearance, 0 when off).
   std::vector<double> sweep;
   Eigen::Vector3d com_acc = Eigen::Vector3d::Zero();  ///< CoM acceleration, world axes (m/s^2)
+  /// Scratch for a term's list of per-sample values (distances, ratios): one SampleData per
+  /// workspace (thread), so the terms evaluate without allocating once it has grown.
+  mutable Eigen::VectorXd values;
+  /// The first n entries of `values`, grown to at least n.
+  Eigen::VectorXd::SegmentReturnType scratch(Eigen::Index n) const {
+    if (values.size() < n) values.resize(n);
+    return values.head(n);
+  }
 };
 
 /// A family of rows at the samples.

@@ -11,7 +11,7 @@ class SelfClearance final : public SampleTerm {
   Family family() const override { return Family::SelfCollision; }
   int rows(const ProblemModel&, const GridPoint&) const override { return 1; }
   void evaluate(const ProblemModel& p, const SampleData& d, double* out) const override {
-    Eigen::VectorXd dist(static_cast<Eigen::Index>(p.self_pairs.size()));
+    auto dist = d.scratch(static_cast<Eigen::Index>(p.self_pairs.size()));
     for (std::size_t i = 0; i < p.self_pairs.size(); ++i) {
       const auto a = static_cast<std::size_t>(p.self_pairs[i].first);
       const auto b = static_cast<std::size_t>(p.self_pairs[i].second);

@@ -13,7 +13,7 @@ class TorqueLimit final : public SampleTerm {
   void evaluate(const ProblemModel& p, const SampleData& d, double* out) const override {
     const auto& desc = p.model_template.description();
     const int na = p.model_template.actuatedCount();
-    Eigen::VectorXd ratio(2 * na);
+    auto ratio = d.scratch(2 * na);
     for (int j = 0; j < na; ++j) {
       const double tq = d.st->tau_act(j);
       ratio(2 * j) = tq / desc.actuated[static_cast<std::size_t>(j)].torque;

@@ -11,7 +11,7 @@ class VelocityLimit final : public SampleTerm {
   int rows(const ProblemModel&, const GridPoint&) const override { return 1; }
   void evaluate(const ProblemModel& p, const SampleData& d, double* out) const override {
     const auto& desc = p.model_template.description();
-    Eigen::VectorXd ratio(24);
+    auto ratio = d.scratch(24);
     for (int j = 0; j < 12; ++j) {
       const auto& aj =
           desc.actuated[static_cast<std::size_t>(p.leg_act[static_cast<std::size_t>(j)])];

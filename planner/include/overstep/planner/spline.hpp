@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <unsupported/Eigen/Splines>
 
 #include "overstep/planner/phases.hpp"
 
@@ -48,6 +49,10 @@ class PhaseSpline {
   int degree_ = 3;
   Eigen::ArrayXd knots_;
   double t_end_ = 0.0;
+  // Eigen's splines over the knots (control points unused): the compile-time degree keeps the
+  // basis evaluation off the heap.
+  Eigen::Spline<double, 1, 3> cubic_;
+  Eigen::Spline<double, 1, 5> quintic_;
 };
 
 }  // namespace overstep::planner

@@ -51,7 +51,8 @@ double obstacleDistanceFcl(const Capsule& a, const ObstacleGeometry& obstacle,
                            Eigen::Vector3d* pa = nullptr, Eigen::Vector3d* pb = nullptr);
 /// Smooth minimum -1/rho log(sum exp(-rho d_i)) (KS; <= min d_i, within log(n)/rho of it);
 /// writes d(smoothMin)/d(d_i) (softmax weights, summing to 1) if requested.
-double smoothMin(const Eigen::VectorXd& d, double rho, Eigen::VectorXd* weights = nullptr);
+double smoothMin(const Eigen::Ref<const Eigen::VectorXd>& d, double rho,
+                 Eigen::VectorXd* weights = nullptr);
 /// Smooth minimum of distances as their softmin-weighted mean, sum_i w_i d_i with
 /// w = softmax(-rho d) (the Boltzmann operator). Exact where the nearest distances tie (a foot's
 /// parallel capsules facing a bar) and where one is nearest by far; otherwise above min d_i by at
@@ -59,6 +60,7 @@ double smoothMin(const Eigen::VectorXd& d, double rho, Eigen::VectorXd* weights 
 /// minimum (KS) lies below min d_i by up to log(n) / rho instead: 1.8 mm for six tied foot
 /// capsules, which made a start stance 10.5 mm from the bar violate a 10 mm clearance.
 /// Writes the gradient d(softMin)/d(d_i) = w_i (1 - rho (d_i - softMin)) if requested.
-double softMin(const Eigen::VectorXd& d, double rho, Eigen::VectorXd* gradient = nullptr);
+double softMin(const Eigen::Ref<const Eigen::VectorXd>& d, double rho,
+               Eigen::VectorXd* gradient = nullptr);
 
 }  // namespace overstep::robots

@@ -109,6 +109,8 @@ class WholeBodyModel {
   Eigen::Isometry3d jointPose(const std::string& joint) const;
   /// World-aligned Jacobian of the frame: rows [angular; linear velocity of the frame origin].
   Eigen::MatrixXd frameJacobian(int frame) const;
+  /// The same into J (resized to 6 x dofs; no allocation once it has that size).
+  void frameJacobian(int frame, Eigen::MatrixXd& J) const;
   /// World-aligned velocity [angular; linear of the origin].
   Vector6d frameVelocity(int frame) const;
   /// Classical world acceleration [angular; linear of the origin] (needs accelerations set).
@@ -136,6 +138,9 @@ class WholeBodyModel {
   /// Actuated rows: joint torques. Elastic rows: zero when the motion is dynamically consistent.
   /// Base rows: the generalized contact force the motion requires.
   Eigen::VectorXd inverseDynamics() const;
+  /// The same into tau (resized to dofs; no allocation once it has that size, DART's own
+  /// recursion aside).
+  void inverseDynamics(Eigen::VectorXd& tau) const;
   /// Generalized forces of the robot in contact (seed eq. 1): tau_id - sum_c J_c^T w_c, with
   /// tau_id = inverseDynamics() at the current state and J_c the world-aligned Jacobian of
   /// contact c's frame. Actuated rows: the actuator torques (the robot hanging from its base
