@@ -336,14 +336,13 @@ Simulator::Simulator(const robots::WholeBodyModel& model, const TruthEffects& tr
   s.world->setTimeStep(options.dt);
   s.world->setGravity(Eigen::Vector3d(0.0, 0.0, -d.gravity));
   // The contact impulses by projected Gauss-Seidel (DART's PgsBoxedLcpSolver, to its default
-  // tolerance), not DART's default Dantzig pivoting. With both soles down
-  // the legs and the ground close a chain that the velocity servos make rigid, and the share of
-  // the horizontal force between the feet is left undetermined by the contact problem: Dantzig
-  // returns a vertex of its solution set, which jumped between steps (each sole's Fx by 6.3 N per
-  // 1 ms step on average and up to 320 N, 63 steps at the friction limit in one default demo;
-  // up to 270 N of internal shear on the first step, standing), where projected Gauss-Seidel's
-  // solution moves with the state (0.9 N per step, none at the limit; the same with a 1000 times
-  // tighter tolerance).
+  // tolerance), not DART's default Dantzig pivoting. With both soles down the legs and the
+  // ground close a chain that the velocity servos make rigid, and the contact problem leaves the
+  // split of the horizontal force between the feet undetermined: Dantzig returns a vertex of its
+  // solution set, which jumped between steps (each sole's Fx by 6.3 N per 1 ms step on average
+  // and up to 320 N, 63 steps at the friction limit in one default demo; up to 270 N of internal
+  // shear on the first step, standing), where projected Gauss-Seidel's solution moves with the
+  // state (0.9 N per step, none at the limit; the same with a 1000 times tighter tolerance).
   s.world->setConstraintSolver(std::make_unique<dart::constraint::BoxedLcpConstraintSolver>(
       std::make_shared<dart::constraint::PgsBoxedLcpSolver>(), nullptr));
   s.world->getConstraintSolver()->setCollisionDetector(
