@@ -320,11 +320,6 @@ struct WholeBodyModel::Impl {
     }
   }
 
-  Eigen::VectorXd toDart(const Eigen::VectorXd& x) const {
-    Eigen::VectorXd out(n);
-    for (int i = 0; i < n; ++i) out(perm[i]) = x(i);
-    return out;
-  }
   /// x in DART's order, in the scratch vector.
   const Eigen::VectorXd& inDartOrder(const Eigen::VectorXd& x) {
     dart_order.resize(n);
