@@ -291,7 +291,8 @@ struct WholeBodyModel::Impl {
   int nb = 0;
   std::vector<int> perm;       // model index -> DART index
   std::vector<int> from_dart;  // DART index -> model index
-  // Scratch for the setters and anchorBase (a model serves one thread at a time).
+  // Scratch for the setters, anchorBase and contactWrenchFromBase (a model serves one thread at
+  // a time).
   Eigen::VectorXd dart_order;
   Eigen::MatrixXd jacobian;
   Eigen::VectorXd reflected;  // per model coordinate: rotor term (0 for base/elastic)
