@@ -92,6 +92,54 @@ TEST_F(RuntimeTest, TrackSamplesReproduceThePlan) {
   EXPECT_EQ(s.t, 0.0);
 }
 
+// A contact switch is written as two samples 1 us apart, the phase before and the one after,
+// and the switching foot's planned load differs between them. The track lengthens each loaded
+// leg by its load / the bushings' vertical stiffness and commands that offset's rate: taken over
+// the microsecond it read as rad/s in the leg (sent clamped at the velocity limit for a tick).
+TEST_F(RuntimeTest, TrackVelocitiesStaySmoothAcrossAContactSwitch) {
+  const core::Plan& base = *plan_;
+  // The switch: base sample kb written twice, 1 us before its time (phase 0) and at it (1).
+  const int kb = base.samples() / 2;
+  core::Plan p = base;
+  p.resize(base.samples() + 1, model_->dofs(), model_->actuatedCount());
+  auto src = [kb](int k) { return k <= kb ? k : k - 1; };
+  auto copy = [&](const auto& from, auto& to) {
+    for (int k = 0; k < p.samples(); ++k) to.col(k) = from.col(src(k));
+  };
+  copy(base.q, p.q);
+  copy(base.v, p.v);
+  copy(base.a, p.a);
+  copy(base.tau, p.tau);
+  copy(base.com, p.com);
+  copy(base.zmp_wholebody, p.zmp_wholebody);
+  copy(base.zmp_tablecart, p.zmp_tablecart);
+  copy(base.right_foot, p.right_foot);
+  copy(base.left_foot, p.left_foot);
+  copy(base.right_wrench, p.right_wrench);
+  copy(base.left_wrench, p.left_wrench);
+  for (int k = 0; k < p.samples(); ++k) {
+    p.t(k) = base.t(src(k));
+    p.phase(k) = k <= kb ? 0 : 1;
+  }
+  p.t(kb) -= 1e-6;
+  p.phases.push_back(p.phases.front());
+  p.phases.back().name = "after";
+  // 5 N more on the right sole just before the switch (and 5 N less on the left).
+  p.right_wrench(5, kb) += 5.0;
+  p.left_wrench(5, kb) -= 5.0;
+  runtime::PlanTrack track(p, *model_);
+  runtime::TrackSample s = track.makeSample();
+  // The offsets move by ~5 N / k_vertical (~20 um at the sole) over a sample period at most:
+  // a joint rate of the order of 0.01 rad/s; over 1 us it would be 5000 times that.
+  double worst = 0.0;
+  for (int k = 0; k < p.samples(); ++k) {
+    track.sample(p.t(k), s);
+    worst = std::max(worst, (s.qd - p.v.col(k).segment(6, track.joints())).cwiseAbs().maxCoeff());
+  }
+  EXPECT_GT(worst, 1e-4) << "the load change must show in the rates";
+  EXPECT_LT(worst, 0.05);
+}
+
 TEST_F(RuntimeTest, TrackRejectsPlansForAnotherRobotOrOutsideLimits) {
   core::Plan other = *plan_;
   other.robot_hash = "0123456789abcdef";
