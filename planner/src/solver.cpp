@@ -18,7 +18,7 @@ constexpr int kInfeasibleStall = 80;
 /// budget, not a stall rule: SLSQP still lowers the objective then, slowly (the 5 cm bar's
 /// target stage: 3.44 at its first feasible point, 2.61 after the 40; ending a stage only after
 /// 40 iterations without a 1e-4 better objective took that plan from 371 Jacobians, 121 s to
-/// 765, 267 s for an objective of 1.92; docs/history/planner.md, session 29).
+/// 765, 267 s for an objective of 1.92; docs/history/planner.md).
 constexpr int kFeasibleBudget = 40;
 /// The same budget in the homotopy's intermediate stages, whose solutions only start the next
 /// stage. Their objective matters for where the target stage starts (ending them at their first
