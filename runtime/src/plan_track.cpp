@@ -148,8 +148,11 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
     imu_omega_.col(k) = model.frameVelocity(imu).head<3>();
     const Eigen::Vector3d pb = model.framePose(base).translation();
     base_pos_.col(k) = pb;
-    if (k > 0) zmp_vel_.col(k) = (zmp_.col(k) - zmp_.col(k - 1)) * rate_;
-    if (k > 0) zmp_wb_vel_.col(k) = (zmp_wb_.col(k) - zmp_wb_.col(k - 1)) * rate_;
+    if (const int a = differenceBase(k); a >= 0) {
+      const double dt = t_(k) - t_(a);
+      zmp_vel_.col(k) = (zmp_.col(k) - zmp_.col(a)) / dt;
+      zmp_wb_vel_.col(k) = (zmp_wb_.col(k) - zmp_wb_.col(a)) / dt;
+    }
     const Eigen::MatrixXd Jc = model.comJacobian();
     for (int f = 0; f < 2; ++f) {
       const Eigen::Isometry3d Xs = model.framePose(sole[f]);
@@ -182,8 +185,13 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
                                     Jc.leftCols<6>() * Jb.partialPivLu().solve(Ja);
     }
   }
-  if (N > 1) zmp_vel_.col(0) = zmp_vel_.col(1);
-  if (N > 1) zmp_wb_vel_.col(0) = zmp_wb_vel_.col(1);
+  for (int k = 0; k < N && differenceBase(k) < 0; ++k) {  // the first half period: the next rate
+    int b = k + 1;
+    while (b < N && differenceBase(b) < 0) ++b;
+    if (b == N) break;
+    zmp_vel_.col(k) = zmp_vel_.col(b);
+    zmp_wb_vel_.col(k) = zmp_wb_vel_.col(b);
+  }
   compensateVerticalGive(d.bushing_vertical_stiffness);
   model_ = std::make_unique<robots::WholeBodyModel>(model);
   q0_ = plan.q.col(0);
@@ -214,18 +222,19 @@ void PlanTrack::compensateVerticalGive(double stiffness) {
       for (int i = 0; i < 6; ++i) dq(leg_[std::size_t(f)][std::size_t(i)], k) += dql(i);
     }
   q_ += dq;
-  // A contact switch has two samples 1 us apart (the phase before and the one after), and the
-  // offsets of the two differ by the switching foot's last planned load: a difference over that
-  // microsecond read as several rad/s in the stance leg at every switch, which the replay sent
-  // for one tick clamped at the joints' velocity limits (measured: 3.8-6.1 rad/s, the stance
-  // foot rocking edge to edge at 5 cm lift-off). The rate is taken over at least half a period.
-  const double min_dt = 0.5 / rate_;
-  for (int k = 1; k < N; ++k) {
-    int a = k - 1;
-    while (a > 0 && t_(k) - t_(a) < min_dt) --a;
-    const double dt = t_(k) - t_(a);
-    if (dt > 0.0) qd_.col(k) += (dq.col(k) - dq.col(a)) / dt;
-  }
+  // The offsets of a switch's two samples differ by the switching foot's last planned load:
+  // over the microsecond between them that read as several rad/s in the stance leg, which the
+  // replay sent for one tick clamped at the joints' velocity limits (measured: 3.8-6.1 rad/s, the
+  // stance foot rocking edge to edge at the 5 cm bar's lift-off).
+  for (int k = 1; k < N; ++k)
+    if (const int a = differenceBase(k); a >= 0)
+      qd_.col(k) += (dq.col(k) - dq.col(a)) / (t_(k) - t_(a));
+}
+
+int PlanTrack::differenceBase(int k) const {
+  int a = k - 1;
+  while (a >= 0 && t_(k) - t_(a) < 0.5 / rate_) --a;
+  return a;
 }
 
 bool PlanTrack::planMove(const Eigen::VectorXd& q_now, int samples, Eigen::MatrixXd& out) const {

@@ -96,6 +96,7 @@ TEST_F(RuntimeTest, TrackSamplesReproduceThePlan) {
 // and the switching foot's planned load differs between them. The track lengthens each loaded
 // leg by its load / the bushings' vertical stiffness and commands that offset's rate: taken over
 // the microsecond it read as rad/s in the leg (sent clamped at the velocity limit for a tick).
+// The ZMP references' rates are differences too: over the microsecond they read as zero.
 TEST_F(RuntimeTest, TrackVelocitiesStaySmoothAcrossAContactSwitch) {
   const core::Plan& base = *plan_;
   // The switch: base sample kb written twice, 1 us before its time (phase 0) and at it (1).
@@ -127,6 +128,12 @@ TEST_F(RuntimeTest, TrackVelocitiesStaySmoothAcrossAContactSwitch) {
   // 5 N more on the right sole just before the switch (and 5 N less on the left).
   p.right_wrench(5, kb) += 5.0;
   p.left_wrench(5, kb) -= 5.0;
+  // Both ZMP references move forward at 2 cm/s.
+  const double zmp_speed = 0.02;
+  for (int k = 0; k < p.samples(); ++k) {
+    p.zmp_tablecart(0, k) += zmp_speed * p.t(k);
+    p.zmp_wholebody(0, k) += zmp_speed * p.t(k);
+  }
   runtime::PlanTrack track(p, *model_);
   runtime::TrackSample s = track.makeSample();
   // The offsets move by ~5 N / k_vertical (~20 um at the sole) over a sample period at most:
@@ -135,6 +142,8 @@ TEST_F(RuntimeTest, TrackVelocitiesStaySmoothAcrossAContactSwitch) {
   for (int k = 0; k < p.samples(); ++k) {
     track.sample(p.t(k), s);
     worst = std::max(worst, (s.qd - p.v.col(k).segment(6, track.joints())).cwiseAbs().maxCoeff());
+    EXPECT_NEAR(s.ref.zmp_vel.x(), zmp_speed, 1e-9) << "sample " << k;
+    EXPECT_NEAR(s.ref.zmp_wholebody_vel.x(), zmp_speed, 1e-9) << "sample " << k;
   }
   EXPECT_GT(worst, 1e-4) << "the load change must show in the rates";
   EXPECT_LT(worst, 0.05);

@@ -103,6 +103,10 @@ class PlanTrack {
  private:
   /// Adds to the joint references the offsets that make up for the soles' compression.
   void compensateVerticalGive(double stiffness);
+  /// The sample a backward difference at sample k > 0 takes its step from: the latest one at
+  /// least half a period earlier (a contact switch is two samples 1 us apart; a difference over
+  /// that microsecond is noise over 1e-6 s). -1 when there is none.
+  int differenceBase(int k) const;
 
   int joints_ = 0;
   double duration_ = 0.0, rate_ = 200.0;
