@@ -545,6 +545,52 @@ TEST_F(Problem, DerivativesMatchFineCentralDifferences) {
   }
 }
 
+// Each objective term alone (its weight 1, every other 0: switched off): its gradient against
+// central differences of the objective (step 1e-7) on a restored point, NaN-prefilled, over the
+// durations, the placements and every fifth control point, to 1e-4 of the largest entry; the
+// term must move with some of them (a term with a zero gradient would pass vacuously).
+TEST_F(Problem, EachObjectiveTermsGradientMatchesCentralDifferences) {
+  const Eigen::VectorXd& x = restored();
+  const int lead = problem_->layout().legs;  // durations and placements come first
+  for (const auto& [name, weight] : PlannerConfig{}.weights) {
+    (void)weight;
+    PlannerConfig cfg;
+    for (auto& [other, w] : cfg.weights) w = other == name ? 1.0 : 0.0;
+    core::ObstacleSpec ob;
+    ob.height = 0.05;
+    OverstepProblem one(*model_, cfg, ob);
+    ASSERT_EQ(one.layout().total, x.size());
+    Evaluation e0;
+    one.evaluate(x, e0);
+    Eigen::VectorXd g = Eigen::VectorXd::Constant(x.size(), std::nan(""));
+    Eigen::MatrixXd ji, je;
+    one.derivatives(x, e0, g, ji, je);
+    ASSERT_TRUE(g.allFinite()) << name;
+    auto objective = [&](int j, double h) {
+      Eigen::VectorXd xh = x;
+      xh(j) += h;
+      Evaluation e;
+      one.evaluate(xh, e);
+      return e.objective;
+    };
+    double largest = 0.0, worst = 0.0;
+    int worst_j = -1;
+    for (int j = 0; j < x.size(); ++j) {
+      if (j >= lead && (j - lead) % 5 != 0) continue;
+      const double h = 1e-7 * std::max(1.0, std::abs(x(j)));
+      const double cd = (objective(j, h) - objective(j, -h)) / (2 * h);
+      largest = std::max(largest, std::abs(cd));
+      if (std::abs(g(j) - cd) > worst) {
+        worst = std::abs(g(j) - cd);
+        worst_j = j;
+      }
+    }
+    std::printf("  %-17s worst %.2e of the largest entry %.2e\n", name.c_str(), worst, largest);
+    EXPECT_GT(largest, 1e-6) << name << ": the term does not move";
+    EXPECT_LE(worst, 1e-4 * (1.0 + largest)) << name << ", column " << worst_j;
+  }
+}
+
 // Mesh refinement: check points carry the path constraints of their instant (not the elastic
 // dynamics) and no objective weight; a point on or next to a sample is dropped; the rows'
 // derivatives at them are right.
