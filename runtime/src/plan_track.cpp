@@ -185,12 +185,12 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
                                     Jc.leftCols<6>() * Jb.partialPivLu().solve(Ja);
     }
   }
-  for (int k = 0; k < N && differenceBase(k) < 0; ++k) {  // the first half period: the next rate
-    int b = k + 1;
-    while (b < N && differenceBase(b) < 0) ++b;
-    if (b == N) break;
-    zmp_vel_.col(k) = zmp_vel_.col(b);
-    zmp_wb_vel_.col(k) = zmp_wb_vel_.col(b);
+  // The samples of the first half period have no difference of their own: the first rate.
+  int first = 0;
+  while (first < N && differenceBase(first) < 0) ++first;
+  for (int k = 0; k < first && first < N; ++k) {
+    zmp_vel_.col(k) = zmp_vel_.col(first);
+    zmp_wb_vel_.col(k) = zmp_wb_vel_.col(first);
   }
   compensateVerticalGive(d.bushing_vertical_stiffness);
   model_ = std::make_unique<robots::WholeBodyModel>(model);
