@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -157,6 +158,18 @@ int Plan::sampleAt(double time, int which_phase) const {
     for (int i = first; i <= last; ++i)
       if (phase(i) == which_phase) k = i;
   return k;
+}
+
+Wrench Plan::wrench(int foot, int k) const {
+  const Eigen::MatrixXd& w = foot == 0 ? right_wrench : left_wrench;
+  const Eigen::MatrixXd& pose = foot == 0 ? right_foot : left_foot;
+  return Wrench::fromSpatial(w.col(k), Axes::kWorld, pose.col(k).head<3>());
+}
+
+void Plan::setWrench(int foot, int k, const Wrench& w) {
+  assert(w.axes == Axes::kWorld && "Plan::setWrench: a world-axes wrench");
+  const Eigen::MatrixXd& pose = foot == 0 ? right_foot : left_foot;
+  (foot == 0 ? right_wrench : left_wrench).col(k) = w.about(pose.col(k).head<3>()).spatial();
 }
 
 void Plan::resize(int n, int dofs, int actuated) {

@@ -157,9 +157,9 @@ RobotDescription loadOverlay(const std::string& yaml_path, const std::string& te
   if (const YAML::Node c = root["command"])
     parseCommandTiming(c, r, e.command_delay, e.command_lag);
   if (const YAML::Node f = root["ft_sensor"]) {
-    parseForceSensors(f, r, e.ft_bias, e.ft_scale);
+    parseForceSensors(f, r, e.ft);
     for (int i = 0; i < 2; ++i)
-      if (std::abs(e.ft_scale[static_cast<std::size_t>(i)] - 1.0) > 0.5)
+      if (std::abs(e.ft[static_cast<std::size_t>(i)].scale - 1.0) > 0.5)
         r.fail(std::string("ft_sensor.") + (i == 0 ? "right" : "left") + ".scale",
                "expected 0.5 .. 1.5");
   }
@@ -474,8 +474,7 @@ void parseCommandTiming(const YAML::Node& c, const YamlReader& r, double& delay,
 }
 
 void parseForceSensors(const YAML::Node& f, const YamlReader& r,
-                       std::array<Eigen::Matrix<double, 6, 1>, 2>& bias,
-                       std::array<double, 2>& scale) {
+                       std::array<ForceSensorModel, 2>& sensors) {
   r.onlyKeys(f, "ft_sensor", {"right", "left"});
   for (int i = 0; i < 2; ++i) {
     const char* side = i == 0 ? "right" : "left";
@@ -483,9 +482,10 @@ void parseForceSensors(const YAML::Node& f, const YamlReader& r,
     if (!s) continue;
     const std::string key = std::string("ft_sensor.") + side;
     r.onlyKeys(s, key, {"bias", "scale"});
-    if (s["bias"]) bias[static_cast<std::size_t>(i)] = r.vector<6>(s["bias"], key + ".bias");
-    if (s["scale"])
-      scale[static_cast<std::size_t>(i)] = r.positiveValue(s["scale"], key + ".scale");
+    ForceSensorModel& sensor = sensors[static_cast<std::size_t>(i)];
+    if (s["bias"])
+      sensor.bias = Wrench::fromForceMoment(r.vector<6>(s["bias"], key + ".bias"), Axes::kSensor);
+    if (s["scale"]) sensor.scale = r.positiveValue(s["scale"], key + ".scale");
   }
 }
 

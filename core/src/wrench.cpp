@@ -5,31 +5,41 @@
 
 namespace overstep::core {
 
-Vector6d shiftWrench(const Vector6d& w_p, const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
-  Vector6d out = w_p;
-  out.head<3>() += (p - q).cross(w_p.tail<3>());
-  return out;
+const char* axesName(Axes axes) {
+  switch (axes) {
+    case Axes::kWorld:
+      return "world";
+    case Axes::kSole:
+      return "sole";
+    case Axes::kSensor:
+      return "sensor";
+  }
+  return "unknown";
 }
 
-Vector6d transformWrench(const Eigen::Isometry3d& X_WF, const Vector6d& w_F) {
-  const Eigen::Matrix3d& R = X_WF.linear();
-  Vector6d out;
-  out.tail<3>() = R * w_F.tail<3>();
-  out.head<3>() = R * w_F.head<3>() + X_WF.translation().cross(out.tail<3>());
-  return out;
-}
+namespace {
 
-Eigen::Vector2d zmpFromWrench(const Vector6d& w_O, double ground_z, double min_fz) {
-  const double fz = w_O(5);
+/// The point (x, y, h) about which the wrench's x and y moments vanish, from its moment about the
+/// frame's origin.
+Eigen::Vector2d pressureCentre(const Wrench& w, double h, double min_fz) {
+  const Wrench w_O = w.point.isZero(0.0) ? w : w.about(Eigen::Vector3d::Zero());
+  const double fz = w_O.force.z();
   if (!(std::abs(fz) >= min_fz)) {
     return Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
   }
-  // torque about P = (px, py, h) vanishes in x and y.
-  return {(-w_O(1) + ground_z * w_O(3)) / fz, (w_O(0) + ground_z * w_O(4)) / fz};
+  return {(-w_O.moment.y() + h * w_O.force.x()) / fz, (w_O.moment.x() + h * w_O.force.y()) / fz};
 }
 
-Eigen::Vector2d localCop(const Vector6d& w_S, double min_fz) {
-  return zmpFromWrench(w_S, 0.0, min_fz);
+}  // namespace
+
+Eigen::Vector2d zmpFromWrench(const Wrench& w_W, double ground_z, double min_fz) {
+  assert(w_W.axes == Axes::kWorld && "zmpFromWrench: a world-axes wrench");
+  return pressureCentre(w_W, ground_z, min_fz);
+}
+
+Eigen::Vector2d localCop(const Wrench& w_S, double min_fz) {
+  assert(w_S.axes == Axes::kSole && "localCop: a sole-axes wrench");
+  return pressureCentre(w_S, 0.0, min_fz);
 }
 
 Eigen::Vector2d tableCartZmp(const Eigen::Vector3d& com, const Eigen::Vector3d& com_acc, double g,

@@ -26,10 +26,10 @@ Row makeRow(const overstep::plan_reference_t& ref, const overstep::stabilizer_st
   r.q_meas = Eigen::Map<const Eigen::VectorXd>(state.q.data(), nA);
   r.q_cmd = Eigen::Map<const Eigen::VectorXd>(command.q_ref.data(), nA);
   for (int f = 0; f < 2; ++f) {
-    const double* ft = f == 0 ? state.ft_right : state.ft_left;
-    core::Vector6d w;
-    for (int i = 0; i < 6; ++i) w(i) = ft[i];
-    r.w_meas[f] = track.soleWrench(r.index, f, w);
+    const core::Wrench ft = core::Wrench::fromForceMoment(
+        Eigen::Map<const core::Vector6d>(f == 0 ? state.ft_right : state.ft_left),
+        core::Axes::kSensor);
+    r.w_meas[f] = track.soleWrench(r.index, f, ft);
   }
   r.ground_truth = state.has_ground_truth;
   if (r.ground_truth) {
@@ -57,16 +57,13 @@ Row makeRow(const overstep::plan_reference_t& ref, const overstep::stabilizer_st
 
 }  // namespace
 
-core::Vector6d planSoleWrench(const core::Plan& plan, int f, int k) {
-  const Eigen::MatrixXd& pw = f == 0 ? plan.right_wrench : plan.left_wrench;
+core::Wrench planSoleWrench(const core::Plan& plan, int f, int k) {
   const Eigen::MatrixXd& pf = f == 0 ? plan.right_foot : plan.left_foot;
-  const Eigen::Matrix3d R_SW = Eigen::Quaterniond(pf(3, k), pf(4, k), pf(5, k), pf(6, k))
-                                   .normalized()
-                                   .toRotationMatrix()
-                                   .transpose();
-  core::Vector6d w;
-  w << R_SW * pw.col(k).head<3>(), R_SW * pw.col(k).tail<3>();
-  return w;
+  Eigen::Isometry3d X_WF = Eigen::Isometry3d::Identity();
+  X_WF.linear() =
+      Eigen::Quaterniond(pf(3, k), pf(4, k), pf(5, k), pf(6, k)).normalized().toRotationMatrix();
+  X_WF.translation() = pf.col(k).head<3>();
+  return plan.wrench(f, k).inFrame(X_WF, core::Axes::kSole);
 }
 
 AlignedRun alignRun(const core::Plan& plan, const runtime::PlanTrack& track, int nA,
@@ -138,12 +135,12 @@ RunSeries toSeries(const AlignedRun& run, const core::Plan& plan, robots::WholeB
     s.t[i] = r.t;
     for (int f = 0; f < 2; ++f) {
       FootSeries& fs = s.foot[static_cast<std::size_t>(f)];
-      const core::Vector6d wp = planSoleWrench(plan, f, k);
-      fs.fz_plan[i] = wp(5);
-      fs.fz_meas[i] = r.w_meas[f](5);
-      fs.cop_plan[i] = localCop(wp, fz_min);
-      fs.cop_meas[i] = localCop(r.w_meas[f], fz_min);
-      fs.moment_meas[i] = r.w_meas[f].head<2>();
+      const core::Wrench wp = planSoleWrench(plan, f, k);
+      fs.fz_plan[i] = wp.force.z();
+      fs.fz_meas[i] = r.w_meas[f].force.z();
+      fs.cop_plan[i] = loadedCop(wp, fz_min);
+      fs.cop_meas[i] = loadedCop(r.w_meas[f], fz_min);
+      fs.moment_meas[i] = r.w_meas[f].moment.head<2>();
       const auto& ph = plan.phases[static_cast<std::size_t>(r.phase)];
       fs.plan_contact[i] = f == 0 ? ph.right_contact : ph.left_contact;
     }

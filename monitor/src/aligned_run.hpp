@@ -22,7 +22,7 @@ struct Row {
   int phase = 0;
   int index = 0;  ///< plan sample
   Eigen::Vector2d zmp_meas = Eigen::Vector2d::Zero(), zmp_ref = Eigen::Vector2d::Zero();
-  core::Vector6d w_meas[2];  ///< sole frame [M; F] about the sole origin
+  core::Wrench w_meas[2];  ///< measured, sole axes about the sole origin
   Eigen::VectorXd q_meas, q_cmd;
   Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
   Eigen::Vector3d base_velocity = Eigen::Vector3d::Zero();  ///< world, ground truth only
@@ -43,9 +43,9 @@ struct AlignedRun {
 AlignedRun alignRun(const core::Plan& plan, const runtime::PlanTrack& track, int actuated,
                     const std::string& log, const std::string& plan_path);
 
-/// The sole-frame wrench [M; F] about the sole origin that the plan asks of foot f (0 right, 1
-/// left) at sample k.
-core::Vector6d planSoleWrench(const core::Plan& plan, int f, int k);
+/// The wrench (sole axes, about the sole origin) that the plan asks of foot f (0 right, 1 left)
+/// at sample k.
+core::Wrench planSoleWrench(const core::Plan& plan, int f, int k);
 
 /// The fidelity series of an aligned run (plan rows, then hold rows).
 RunSeries toSeries(const AlignedRun& run, const core::Plan& plan, robots::WholeBodyModel& model);

@@ -189,9 +189,9 @@ nlohmann::json against(double value, double target) {
 
 }  // namespace
 
-Eigen::Vector2d localCop(const core::Vector6d& w, double fz_min) {
-  if (!(w(5) > fz_min)) return {kNaN, kNaN};
-  return {-w(1) / w(5), w(0) / w(5)};
+Eigen::Vector2d loadedCop(const core::Wrench& w_sole, double fz_min) {
+  if (!(w_sole.force.z() > fz_min)) return {kNaN, kNaN};
+  return core::localCop(w_sole);
 }
 
 void RunSeries::resize(std::size_t n) {

@@ -194,16 +194,14 @@ int writeReportData(const ReportOptions& o_in, ReportSummary& sum) {
     num(r.stab_level);
     csv += "," + std::to_string(r.stab_mode);
     for (int f = 0; f < 2; ++f) {
-      const core::Vector6d wp = planSoleWrench(plan, f, k);
-      const Eigen::Vector3d mp = wp.head<3>(), fp = wp.tail<3>();
-      const Eigen::Vector3d mm = r.w_meas[f].head<3>(), fm = r.w_meas[f].tail<3>();
-      for (int i = 0; i < 3; ++i) num(fp(i));
-      for (int i = 0; i < 3; ++i) num(mp(i));
-      for (int i = 0; i < 3; ++i) num(fm(i));
-      for (int i = 0; i < 3; ++i) num(mm(i));
+      const core::Wrench wp = planSoleWrench(plan, f, k);
+      for (const core::Wrench* w : {&wp, &r.w_meas[f]}) {
+        for (int i = 0; i < 3; ++i) num(w->force(i));
+        for (int i = 0; i < 3; ++i) num(w->moment(i));
+      }
       const bool contact = f == 0 ? plan.phases[static_cast<std::size_t>(r.phase)].right_contact
                                   : plan.phases[static_cast<std::size_t>(r.phase)].left_contact;
-      const Eigen::Vector2d cp = localCop(wp, fz_min), cm = localCop(r.w_meas[f], fz_min);
+      const Eigen::Vector2d cp = loadedCop(wp, fz_min), cm = loadedCop(r.w_meas[f], fz_min);
       num(cp.x());
       num(cp.y());
       num(cm.x());

@@ -149,25 +149,21 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
                              plan.phases[static_cast<std::size_t>(ph)].left_contact};
     model.setState(q, v, a);
     const Eigen::VectorXd tau = model.inverseDynamics();
-    const core::Vector6d W = model.contactWrenchFromBase(tau);
-    core::Vector6d w[2];
+    const core::Wrench W = model.contactWrenchFromBase(tau);
+    const Eigen::Isometry3d X[2] = {model.framePose(sole[0]), model.framePose(sole[1])};
+    core::Wrench w[2];
     const double s = plan.samples() > k + 1 ? tau_dt / (plan.t(k + 1) - plan.t(k)) : 0.0;
     for (int f = 0; f < 2; ++f) {
-      const Eigen::MatrixXd& pw = f == 0 ? plan.right_wrench : plan.left_wrench;
       // No interpolation across a phase change: the wrench may jump at a contact switch.
       const bool same = k + 1 < plan.samples() && plan.phase(k + 1) == plan.phase(k);
-      w[f] = same ? core::Vector6d((1 - s) * pw.col(k) + s * pw.col(k + 1))
-                  : core::Vector6d(pw.col(k));
-      if (!contact[f]) w[f].setZero();
+      const core::Wrench w_k = plan.wrench(f, k);
+      w[f] = (same ? (1 - s) * w_k + s * plan.wrench(f, k + 1) : w_k).about(X[f].translation());
+      if (!contact[f]) w[f] = core::Wrench::zero(core::Axes::kWorld, X[f].translation());
     }
-    Eigen::Isometry3d X[2] = {model.framePose(sole[0]), model.framePose(sole[1])};
     // Dynamic consistency: base rows and the elastic joints.
-    core::Vector6d sum = core::Vector6d::Zero();
-    for (int f = 0; f < 2; ++f)
-      sum += core::shiftWrench(w[f], X[f].translation(), Eigen::Vector3d::Zero());
-    const core::Vector6d res = W - sum;
-    dyn.add(res.head<3>().cwiseAbs().maxCoeff(), t, "base moment");
-    dyn.add(res.tail<3>().cwiseAbs().maxCoeff(), t, "base force");
+    const core::Wrench res = W - w[0] - w[1];  // about the world origin
+    dyn.add(res.moment.cwiseAbs().maxCoeff(), t, "base moment");
+    dyn.add(res.force.cwiseAbs().maxCoeff(), t, "base force");
     // The robot in contact: actuator torques and the bushings' residual are what inverse
     // dynamics leaves after the feet's wrenches (J^T w), not the torques of a robot hanging
     // from its pelvis.
@@ -178,8 +174,8 @@ CheckReport checkPlan(const core::Plan& plan, const robots::WholeBodyModel& mode
     for (int f = 0; f < 2; ++f) {
       const std::string side = f == 0 ? "right" : "left";
       if (contact[f]) {
-        const Eigen::Vector3d mo = X[f].linear().transpose() * w[f].head<3>();
-        const Eigen::Vector3d fo = X[f].linear().transpose() * w[f].tail<3>();
+        const core::Wrench w_S = w[f].inFrame(X[f], core::Axes::kSole);
+        const Eigen::Vector3d &mo = w_S.moment, &fo = w_S.force;
         uni.add(-fo.z(), t, side);
         // CoP and friction ratios are meaningless as the load vanishes (lift-off): below 5 % of
         // the weight they are checked in their linear form against that 5 %.

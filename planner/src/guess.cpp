@@ -155,7 +155,7 @@ Eigen::VectorXd OverstepProblem::initialGuess() {
         for (int e = 0; e < 2; ++e) {
           const int fc = m.flex_coord[static_cast<std::size_t>(2 * f + e)];
           double r = st.tau(fc);
-          if (st.contact[f]) r -= J.col(fc).dot(st.wrench[f]);
+          if (st.contact[f]) r -= J.col(fc).dot(st.wrench[f].spatial());
           const double stiff =
               model.description().elastic[static_cast<std::size_t>(2 * f + e)].stiffness;
           q(fc) = std::clamp(q(fc) - r / stiff, -0.1, 0.1);

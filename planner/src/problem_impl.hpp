@@ -333,7 +333,7 @@ struct OverstepProblem::Impl : ProblemModel {
     Eigen::VectorXd& tau = st.tau_contact;
     tau = st.tau;
     for (int f = 0; f < 2; ++f)
-      if (st.contact[f]) tau.noalias() -= st.J_sole[f].transpose() * st.wrench[f];
+      if (st.contact[f]) tau.noalias() -= st.J_sole[f].transpose() * st.wrench[f].spatial();
     st.tau_act = tau.segment(6, model_template.actuatedCount());
   }
 
@@ -437,7 +437,7 @@ struct OverstepProblem::Impl : ProblemModel {
     for (int f = 0; f < 2; ++f)
       for (int e = 0; e < 2; ++e) {
         const int c = flex_coord[static_cast<std::size_t>(2 * f + e)];
-        r(2 * f + e) = st.tau(c) - (f == stance ? J.col(c).dot(st.wrench[f]) : 0.0);
+        r(2 * f + e) = st.tau(c) - (f == stance ? J.col(c).dot(st.wrench[f].spatial()) : 0.0);
       }
     Eigen::Vector3d mo, fo;
     soleWrench(st, stance, mo, fo);
@@ -674,11 +674,11 @@ struct OverstepProblem::Impl : ProblemModel {
   /// the two elastic-ankle balances).
   void distributeWrench(Workspace& w) const {
     State& st = w.st;
-    st.wrench[kRight].setZero();
-    st.wrench[kLeft].setZero();
+    for (int f = 0; f < 2; ++f)
+      st.wrench[f] = core::Wrench::zero(core::Axes::kWorld, st.sole[f].translation());
     if (st.contact[kRight] != st.contact[kLeft]) {
       const int f = st.contact[kRight] ? kRight : kLeft;
-      st.wrench[f] = core::shiftWrench(st.W_O, Eigen::Vector3d::Zero(), st.sole[f].translation());
+      st.wrench[f] = st.W_O.about(st.sole[f].translation());
       return;
     }
     // Unknowns z = [m_R f_R m_L f_L]; rows: sum (6) and the four elastic joints.
@@ -698,7 +698,7 @@ struct OverstepProblem::Impl : ProblemModel {
         b(6 + 2 * f + e) = st.tau(c);
       }
     }
-    b.head<6>() = st.W_O;
+    b.head<6>() = st.W_O.spatial();
     // The sum is exact (Newton-Euler). The remaining six internal degrees of freedom balance the
     // four elastic ankles through a weighted pseudo-inverse: exact whenever the feet can balance
     // them, and a residual (a row of the problem, met by the ankle-flex variables) in the
@@ -718,8 +718,9 @@ struct OverstepProblem::Impl : ProblemModel {
         rho(f) = 0.5 * (fz + std::sqrt(fz * fz + kLoadFloor * kLoadFloor)) * st.share[f];
       }
     }
-    st.wrench[kRight] = z.head<6>();
-    st.wrench[kLeft] = z.segment<6>(6);
+    for (int f = 0; f < 2; ++f)
+      st.wrench[f] = core::Wrench::fromSpatial(z.segment<6>(6 * f), core::Axes::kWorld,
+                                               st.sole[f].translation());
   }
 
   // -------------------------------------------------------------- rows of one sample

@@ -100,14 +100,14 @@ struct State {
   Eigen::VectorXd q, v, a, tau;  // tau: inverse dynamics without contacts (all coordinates)
   Eigen::VectorXd tau_act;       // actuator torques of the robot in contact (seed eq. 1)
   Eigen::VectorXd tau_contact;   // scratch: all coordinates of tau minus the feet's J^T w
-  core::Vector6d wrench[2];      // [torque; force] about each sole origin, world frame
+  core::Wrench wrench[2];        // world axes, about each sole origin
   bool contact[2] = {false, false};
   Eigen::Isometry3d sole[2];
   /// 6 x dofs Jacobians of the soles in contact at q ([angular; linear], world axes, about the
   /// sole origin); computed once per state, read by the wrench split, the contact torques and the
   /// elastic rows.
   Eigen::MatrixXd J_sole[2];
-  core::Vector6d W_O;  // total contact wrench about the world origin
+  core::Wrench W_O;  // total contact wrench, world axes about the world origin
   double ik_error = 0.0;
   double reach = 0.0;       // hip-ankle distance of the IK leg
   double ds_balance = 0.0;  // DS: unreachable ankle-moment balance about the feet's line, N m

@@ -67,9 +67,10 @@ core::Plan standingPlan(robots::WholeBodyModel& m, double duration, double rate)
   p.coordinates = m.coordinateNames();
   const int N = static_cast<int>(std::round(duration * rate)) + 1;
   p.resize(N, n, m.actuatedCount());
-  core::Vector6d w_r = core::Vector6d::Zero(), w_l = core::Vector6d::Zero();
-  w_r(5) = mg - fl;
-  w_l(5) = fl;
+  const core::Wrench w_r(Eigen::Vector3d(0.0, 0.0, mg - fl), Eigen::Vector3d::Zero(),
+                         Xr.translation(), core::Axes::kWorld);
+  const core::Wrench w_l(Eigen::Vector3d(0.0, 0.0, fl), Eigen::Vector3d::Zero(), Xl.translation(),
+                         core::Axes::kWorld);
   const Eigen::VectorXd tau_c = m.torquesInContact(tau, {{rs, w_r}, {ls, w_l}});
   for (int k = 0; k < N; ++k) {
     p.t(k) = k / rate;
@@ -84,7 +85,7 @@ core::Plan standingPlan(robots::WholeBodyModel& m, double duration, double rate)
       const Eigen::Quaterniond qf(X.linear());
       pose << X.translation(), qf.w(), qf.x(), qf.y(), qf.z();
       (f == 0 ? p.right_foot : p.left_foot).col(k) = pose;
-      (f == 0 ? p.right_wrench : p.left_wrench).col(k) = f == 0 ? w_r : w_l;
+      p.setWrench(f, k, f == 0 ? w_r : w_l);
     }
   }
   return p;
@@ -139,7 +140,7 @@ core::Plan excitationPlan(robots::WholeBodyModel& m, double duration, double amp
     }
     m.anchorBase(ls, X_left, q, v, a);
     const Eigen::VectorXd tau = m.inverseDynamics();
-    const core::Vector6d W = m.contactWrenchFromBase(tau);  // about the world origin
+    const core::Wrench W = m.contactWrenchFromBase(tau);
     p.q.col(k) = q;
     p.v.col(k) = v;
     p.a.col(k) = a;
@@ -149,20 +150,19 @@ core::Plan excitationPlan(robots::WholeBodyModel& m, double duration, double amp
     p.zmp_tablecart.col(k) = core::tableCartZmp(m.com(), m.comAcceleration(), d.gravity);
     // Split the normal force by the ZMP's lateral position; each foot's CoP at the ZMP's x.
     const double yr = p.right_foot(1, k), yl = p.left_foot(1, k);
-    const double fz = W(5) > 0.0 ? W(5) : mg;
+    const double fz = W.force.z() > 0.0 ? W.force.z() : mg;
     const double share_l = std::clamp((zmp.y() - yr) / (yl - yr), 0.0, 1.0);
     for (int f = 0; f < 2; ++f) {
       const double fzf = fz * (f == 0 ? 1.0 - share_l : share_l);
-      const Eigen::Vector3d o(f == 0 ? p.right_foot(0, k) : p.left_foot(0, k), f == 0 ? yr : yl,
-                              0.0);
-      core::Vector6d w = core::Vector6d::Zero();
-      w(5) = fzf;
-      w(1) = -(zmp.x() - o.x()) * fzf;  // My about the sole origin: CoP at the ZMP's x
-      (f == 0 ? p.right_wrench : p.left_wrench).col(k) = w;
+      const Eigen::Vector3d o = (f == 0 ? p.right_foot : p.left_foot).col(k).head<3>();
+      // About the sole origin: the CoP at the ZMP's x.
+      p.setWrench(
+          f, k,
+          core::Wrench(Eigen::Vector3d(0.0, 0.0, fzf),
+                       Eigen::Vector3d(0.0, -(zmp.x() - o.x()) * fzf, 0.0), o, core::Axes::kWorld));
     }
-    p.tau.col(k) =
-        m.torquesInContact(tau, {{rs, p.right_wrench.col(k)}, {ls, p.left_wrench.col(k)}})
-            .segment(6, m.actuatedCount());
+    p.tau.col(k) = m.torquesInContact(tau, {{rs, p.wrench(0, k)}, {ls, p.wrench(1, k)}})
+                       .segment(6, m.actuatedCount());
   }
   p.summary_json = R"({"status": "excitation"})";
   return p;

@@ -82,7 +82,7 @@ core::Plan OverstepProblem::toPlan(const Eigen::VectorXd& x, double rate) {
       const Eigen::Quaterniond qf(st.sole[f].linear());
       pose.tail<4>() << qf.w(), qf.x(), qf.y(), qf.z();
       (f == kRight ? p.right_foot : p.left_foot).col(k) = pose;
-      (f == kRight ? p.right_wrench : p.left_wrench).col(k) = st.wrench[f];
+      p.setWrench(f == kRight ? 0 : 1, k, st.wrench[f]);
     }
   }
   return p;

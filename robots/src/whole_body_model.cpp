@@ -735,11 +735,15 @@ Eigen::VectorXd WholeBodyModel::torquesInContact(const Eigen::VectorXd& tau_id,
                                                  const std::vector<FrameWrench>& contacts) const {
   impl_->checkSize(tau_id, "torques");
   Eigen::VectorXd tau = tau_id;
-  for (const auto& c : contacts) tau.noalias() -= frameJacobian(c.frame).transpose() * c.wrench;
+  for (const auto& c : contacts) {
+    assert(c.wrench.axes == core::Axes::kWorld && "torquesInContact: world-axes wrenches");
+    const core::Vector6d w = c.wrench.about(framePose(c.frame).translation()).spatial();
+    tau.noalias() -= frameJacobian(c.frame).transpose() * w;
+  }
   return tau;
 }
 
-Vector6d WholeBodyModel::contactWrenchFromBase(const Eigen::VectorXd& tau) const {
+core::Wrench WholeBodyModel::contactWrenchFromBase(const Eigen::VectorXd& tau) const {
   if (impl_->nb != 6) throw InputError("contactWrenchFromBase needs a floating-base robot");
   BodyNode* base = impl_->skel->getRootBodyNode();
   const Eigen::Vector3d origin_in_base =
@@ -748,7 +752,8 @@ Vector6d WholeBodyModel::contactWrenchFromBase(const Eigen::VectorXd& tau) const
   Eigen::MatrixXd& J = impl_->jacobian;
   impl_->pointJacobian(base, origin_in_base, J);
   const Eigen::Matrix<double, 6, 6> Jb = J.leftCols<6>();
-  return Jb.transpose().partialPivLu().solve(tau.head<6>());
+  return core::Wrench::fromSpatial(Jb.transpose().partialPivLu().solve(tau.head<6>()),
+                                   core::Axes::kWorld);
 }
 
 Eigen::Vector2d WholeBodyModel::zmpFromMotion(double ground_z) const {

@@ -79,10 +79,9 @@ struct RunMeasures {
     effort_sq += o.correction_norm * o.correction_norm;
     ++effort_n;
     for (int f = 0; f < 2; ++f) {
-      const core::Vector6d w = tr.soleWrench(o.sample.index, f, f == 0 ? st.ft_right : st.ft_left);
-      if (w(5) < 50.0) continue;
-      const double cx = -w(1) / w(5), cy = w(0) / w(5);
-      cop_max[f] = std::max(cop_max[f], std::max(std::abs(cx), std::abs(cy)));
+      const core::Wrench w = tr.soleWrench(o.sample.index, f, f == 0 ? st.ft_right : st.ft_left);
+      if (w.force.z() < 50.0) continue;
+      cop_max[f] = std::max(cop_max[f], core::localCop(w).cwiseAbs().maxCoeff());
     }
     const Eigen::AngleAxisd d(st.imu_orientation * o.sample.ref.torso.conjugate());
     const Eigen::Vector3d v = d.axis() * d.angle();
@@ -388,13 +387,9 @@ class ReplayProcess {
       quat[1] = qq.x();
       quat[2] = qq.y();
       quat[3] = qq.z();
-      // World frame [F; M] about the sole origin (the message's convention).
-      const Eigen::Matrix3d R = fr.pose.linear();
-      const Eigen::Vector3d F = R * fr.wrench.tail<3>(), M = R * fr.wrench.head<3>();
-      for (int i = 0; i < 3; ++i) {
-        w[i] = F(i);
-        w[3 + i] = M(i);
-      }
+      // World axes about the sole origin, [F; M] (the message's convention).
+      const core::Vector6d fm = fr.wrench.expressedIn(fr.pose, core::Axes::kWorld).forceMoment();
+      for (int i = 0; i < 6; ++i) w[i] = fm(i);
       (f == 0 ? r.right_contact : r.left_contact) = fr.contact;
     }
     lcm_.publish("OVERSTEP_PLAN_REF", &r);

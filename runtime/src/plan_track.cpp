@@ -49,8 +49,7 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
   duration_ = plan.duration();
   rate_ = plan.rate;
   gravity_ = d.gravity;
-  ft_bias_ = d.effects.ft_bias;
-  ft_scale_ = d.effects.ft_scale;
+  ft_ = d.effects.ft;
   for (const auto& p : plan.phases) {
     if (!p.right_contact && !p.left_contact)
       throw InputError("plan phase '" + p.name + "' has no foot in contact");
@@ -128,7 +127,7 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
   base_pos_.resize(3, N);
   for (int f = 0; f < 2; ++f) {
     sole_pose_[f] = f == 0 ? plan.right_foot : plan.left_foot;
-    wrench_[f].resize(6, N);
+    wrench_[f].resize(static_cast<std::size_t>(N));
     sole_from_base_[f].resize(3, N);
     sole_from_bushing_[f].setZero(3, N);
     sensor_pose_[f].resize(7, N);
@@ -156,10 +155,7 @@ PlanTrack::PlanTrack(const core::Plan& plan, robots::WholeBodyModel& model) {
     const Eigen::MatrixXd Jc = model.comJacobian();
     for (int f = 0; f < 2; ++f) {
       const Eigen::Isometry3d Xs = model.framePose(sole[f]);
-      // Sole-frame wrench from the plan's world-frame [torque; force] about the sole origin.
-      const Eigen::MatrixXd& pw = f == 0 ? plan.right_wrench : plan.left_wrench;
-      wrench_[f].col(k) << Xs.linear().transpose() * pw.col(k).head<3>(),
-          Xs.linear().transpose() * pw.col(k).tail<3>();
+      wrench_[f][static_cast<std::size_t>(k)] = plan.wrench(f, k).inFrame(Xs, core::Axes::kSole);
       sole_from_base_[f].col(k) = Xs.translation() - pb;
       if (!bushing_joints[f].empty()) {
         Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -214,7 +210,7 @@ void PlanTrack::compensateVerticalGive(double stiffness) {
   Eigen::MatrixXd dq = Eigen::MatrixXd::Zero(joints_, N);
   for (int k = 0; k < N; ++k)
     for (int f = 0; f < 2; ++f) {
-      const double c = std::max(0.0, wrench_[f](5, k)) / stiffness;
+      const double c = std::max(0.0, wrench_[f][std::size_t(k)].force.z()) / stiffness;
       if (k == 0) start_compression_[std::size_t(f)] = c;
       core::Vector6d dx = core::Vector6d::Zero();
       dx(5) = -c;
@@ -360,7 +356,8 @@ void PlanTrack::sample(double t, TrackSample& out) const {
     fr.pose.setIdentity();
     fr.pose.linear() = qa.slerp(s, qb).toRotationMatrix();
     fr.pose.translation() = lerp(sole_pose_[f].col(k).head<3>(), sole_pose_[f].col(k1).head<3>());
-    fr.wrench = fr.contact ? core::Vector6d(wrench_[f].col(near)) : core::Vector6d::Zero();
+    fr.wrench = fr.contact ? wrench_[f][static_cast<std::size_t>(near)]
+                           : core::Wrench::zero(core::Axes::kSole);
   }
   const Eigen::Quaterniond ia(imu_quat_(0, k), imu_quat_(1, k), imu_quat_(2, k), imu_quat_(3, k));
   const Eigen::Quaterniond ib(imu_quat_(0, k1), imu_quat_(1, k1), imu_quat_(2, k1),
@@ -391,30 +388,27 @@ void PlanTrack::applyCorrections(const TrackSample& s, const stabilizer::Output&
   }
 }
 
-core::Vector6d PlanTrack::soleWrench(int index, int f, const core::Vector6d& ft) const {
-  const Eigen::Quaterniond qs = quatAt(sensor_pose_[f], index);
-  const Eigen::Matrix3d Rw = qs.toRotationMatrix();
-  const Eigen::Vector3d o = sensor_pose_[f].col(index).head<3>();
-  Eigen::Vector3d F = Rw * ft.head<3>();
-  Eigen::Vector3d M = Rw * ft.tail<3>();  // about the sensor origin
+core::Wrench PlanTrack::soleWrench(int index, int f, const core::Wrench& ft) const {
+  Eigen::Isometry3d X_WS = Eigen::Isometry3d::Identity();  // the sensor
+  X_WS.linear() = quatAt(sensor_pose_[f], index).toRotationMatrix();
+  X_WS.translation() = sensor_pose_[f].col(index).head<3>();
+  core::Wrench w_W = ft.expressedIn(X_WS, core::Axes::kWorld);  // about the sensor origin
   // The sensor also carries the bodies below it: remove their (static) weight.
   const Eigen::Vector3d weight(0.0, 0.0, -below_mass_[f] * gravity_);
-  F -= weight;
-  M -= (Eigen::Vector3d(below_com_[f].col(index)) - o).cross(weight);
-  const Eigen::Vector3d p = sole_pose_[f].col(index).head<3>();
-  M += (o - p).cross(F);  // about the sole origin
-  const Eigen::Matrix3d Rsole = quatAt(sole_pose_[f], index).toRotationMatrix();
-  core::Vector6d w;
-  w << Rsole.transpose() * M, Rsole.transpose() * F;
-  return w;
+  w_W -=
+      core::Wrench(weight, Eigen::Vector3d::Zero(), below_com_[f].col(index), core::Axes::kWorld);
+  Eigen::Isometry3d X_WF = Eigen::Isometry3d::Identity();  // the sole
+  X_WF.linear() = quatAt(sole_pose_[f], index).toRotationMatrix();
+  X_WF.translation() = sole_pose_[f].col(index).head<3>();
+  return w_W.inFrame(X_WF, core::Axes::kSole);
 }
 
 void PlanTrack::estimate(const TrackSample& s, const core::RobotState& st,
                          stabilizer::Measurement& out) const {
   const std::size_t k = static_cast<std::size_t>(s.index);
   // Sensor readings corrected by the model's calibration (an identified bias and scale).
-  out.foot_wrench[0] = soleWrench(s.index, 0, (st.ft_right - ft_bias_[0]) / ft_scale_[0]);
-  out.foot_wrench[1] = soleWrench(s.index, 1, (st.ft_left - ft_bias_[1]) / ft_scale_[1]);
+  out.foot_wrench[0] = soleWrench(s.index, 0, ft_[0].calibrated(st.ft_right));
+  out.foot_wrench[1] = soleWrench(s.index, 1, ft_[1].calibrated(st.ft_left));
   for (int f = 0; f < 2; ++f)
     out.foot_pose[static_cast<std::size_t>(f)] = s.ref.foot[static_cast<std::size_t>(f)].pose;
   out.torso = st.imu_orientation;
@@ -422,7 +416,7 @@ void PlanTrack::estimate(const TrackSample& s, const core::RobotState& st,
   double w[2] = {0.0, 0.0};
   for (int f = 0; f < 2; ++f)
     if (s.ref.foot[std::size_t(f)].contact)
-      w[f] = std::max(s.ref.foot[std::size_t(f)].wrench(5), 1e-3);
+      w[f] = std::max(s.ref.foot[std::size_t(f)].wrench.force.z(), 1e-3);
   const double wsum = w[0] + w[1];
   // Body rotation beyond the plan, seen by the IMU (heading ignored).
   const Eigen::Vector3d dth = tiltVector(st.imu_orientation * s.ref.torso.conjugate());

@@ -74,11 +74,11 @@ class ContactLog {
   void add(double t, const sim::ContactInfo& c) {
     if (!f_) return;
     std::fprintf(f_, "%.4f", t);
-    for (const core::Vector6d& w : c.foot_wrench) {  // [torque; force], world, about the origin
-      const double fz = w(5);
-      const double nan = std::nan("");
-      std::fprintf(f_, ",%.3f,%.3f,%.3f,%.5f,%.5f", w(3), w(4), fz, fz > 0.0 ? -w(1) / fz : nan,
-                   fz > 0.0 ? w(0) / fz : nan);
+    for (const core::Wrench& w : c.foot_wrench) {  // world axes
+      const double fz = w.force.z();
+      const Eigen::Vector2d zmp =
+          fz > 0.0 ? core::zmpFromWrench(w, 0.0, 0.0) : Eigen::Vector2d::Constant(std::nan(""));
+      std::fprintf(f_, ",%.3f,%.3f,%.3f,%.5f,%.5f", w.force.x(), w.force.y(), fz, zmp.x(), zmp.y());
     }
     std::fprintf(f_, ",%d\n", c.contact_points);
   }

@@ -453,16 +453,16 @@ void Simulator::step() {
   bool held[2] = {false, false};
   for (int f = 0; f < 2; ++f) {
     const auto fi = static_cast<std::size_t>(f);
-    const core::Vector6d& w = contacts_.foot_wrench[fi];  // world, about the world origin
+    const core::Wrench& w_W = contacts_.foot_wrench[fi];
     if (!contacts_.foot_contact[fi] ||
-        w(5) < 0.1 * s.robot->getMass() * s.model.description().gravity)
+        w_W.force.z() < 0.1 * s.robot->getMass() * s.model.description().gravity)
       continue;
-    const Eigen::Isometry3d X = s.sole[fi]->getWorldTransform() * s.sole_in_foot[fi];
-    const Eigen::Vector3d m =
-        X.linear().transpose() * (w.head<3>() - X.translation().cross(w.tail<3>()));
-    const double fz = (X.linear().transpose() * w.tail<3>()).z();
-    if (fz <= 0.0) continue;
-    const double cx = -m.y() / fz, cy = m.x() / fz, margin = 0.005;
+    const Eigen::Isometry3d X_WS = s.sole[fi]->getWorldTransform() * s.sole_in_foot[fi];
+    const core::Wrench w_S =
+        w_W.about(X_WS.translation()).expressedIn(X_WS.inverse(), core::Axes::kSole);
+    if (w_S.force.z() <= 0.0) continue;
+    const Eigen::Vector2d cop = core::localCop(w_S);
+    const double cx = cop.x(), cy = cop.y(), margin = 0.005;
     const auto& fd = s.foot_desc[fi];
     held[f] = cx > -fd.sole.x_back + margin && cx < fd.sole.x_front - margin &&
               cy > fd.yMin() + margin && cy < fd.yMax() - margin;
@@ -491,18 +491,18 @@ void Simulator::step() {
   for (int f = 0; f < 2; ++f) {
     dd::BodyNode* bn = s.sole[static_cast<std::size_t>(f)];
     const Eigen::Vector6d imp = bn->getConstraintImpulse() / dt;  // [angular; linear], body frame
-    const Eigen::Isometry3d X = bn->getWorldTransform();
-    core::Vector6d w_body;
-    w_body << imp.head<3>(), imp.tail<3>();
-    contacts_.foot_wrench[static_cast<std::size_t>(f)] = core::transformWrench(X, w_body);
-    contacts_.foot_contact[static_cast<std::size_t>(f)] = w_body.tail<3>().norm() > 1e-6;
+    // About the foot body's origin, in its axes (the sole's, up to the sole offset).
+    const core::Wrench w_B = core::Wrench::fromSpatial(imp, core::Axes::kSole);
+    contacts_.foot_wrench[static_cast<std::size_t>(f)] =
+        w_B.expressedIn(bn->getWorldTransform(), core::Axes::kWorld).about(Eigen::Vector3d::Zero());
+    contacts_.foot_contact[static_cast<std::size_t>(f)] = w_B.force.norm() > 1e-6;
   }
   contacts_.contact_points = static_cast<int>(s.world->getLastCollisionResult().getNumContacts());
   for (std::size_t j = 0; j < s.actuated.size(); ++j)
     s.motor_torque(static_cast<Eigen::Index>(j), s.torque_slot) =
         s.actuated[j]->getConstraintImpulse(0) / dt + s.friction(static_cast<Eigen::Index>(j));
   for (int f = 0; f < 2; ++f)
-    s.ft_hist[static_cast<std::size_t>(f)].col(s.torque_slot) = sensorWrench(f);
+    s.ft_hist[static_cast<std::size_t>(f)].col(s.torque_slot) = sensorWrench(f).forceMoment();
   s.torque_slot = (s.torque_slot + 1) % static_cast<int>(s.motor_torque.cols());
   s.torque_filled = std::min(s.torque_filled + 1, static_cast<int>(s.motor_torque.cols()));
 }
@@ -613,9 +613,7 @@ Eigen::Vector4d Simulator::elasticExternalTorque() const {
     const Eigen::Isometry3d Xj = child->getWorldTransform() * jt->getTransformFromChildBodyNode();
     const Eigen::Vector3d axis = Xj.linear() * jt->getAxis(), o = Xj.translation();
     const int f = e / 2;
-    Eigen::Vector3d m = core::shiftWrench(contacts_.foot_wrench[static_cast<std::size_t>(f)],
-                                          Eigen::Vector3d::Zero(), o)
-                            .head<3>();
+    Eigen::Vector3d m = contacts_.foot_wrench[static_cast<std::size_t>(f)].about(o).moment;
     std::vector<const dd::BodyNode*> stack{child};  // the bodies below this joint
     while (!stack.empty()) {
       const dd::BodyNode* b = stack.back();
@@ -629,15 +627,14 @@ Eigen::Vector4d Simulator::elasticExternalTorque() const {
   return out;
 }
 
-core::Vector6d Simulator::sensorWrench(int f) const {
+core::Wrench Simulator::sensorWrench(int f) const {
   const Impl& s = *impl_;
   const Eigen::Vector3d g(0.0, 0.0, -s.model.description().gravity);
   // What the foot side transmits to the leg through the sensor, by Newton-Euler on the bodies
   // below it: ground reaction + their weight - their momentum rate, about the sensor origin.
   const Eigen::Vector3d o =
       s.sensor[static_cast<std::size_t>(f)]->getWorldTransform().translation();
-  core::Vector6d w = core::shiftWrench(contacts_.foot_wrench[static_cast<std::size_t>(f)],
-                                       Eigen::Vector3d::Zero(), o);
+  core::Wrench w = contacts_.foot_wrench[static_cast<std::size_t>(f)].about(o);
   for (const dd::BodyNode* b : s.below_sensor[static_cast<std::size_t>(f)]) {
     const double m = b->getMass();
     const Eigen::Vector3d c = b->getCOM();
@@ -646,13 +643,13 @@ core::Vector6d Simulator::sensorWrench(int f) const {
     const Eigen::Vector3d om = b->getAngularVelocity(), al = b->getAngularAcceleration();
     const Eigen::Vector3d force = m * (g - b->getCOMLinearAcceleration());
     const Eigen::Vector3d torque_c = -(Iw * al + om.cross(Iw * om));
-    w.head<3>() += torque_c + (c - o).cross(force);
-    w.tail<3>() += force;
+    w.moment += torque_c + (c - o).cross(force);
+    w.force += force;
   }
-  const Eigen::Matrix3d Rs = s.sensor[static_cast<std::size_t>(f)]->getWorldTransform().linear();
-  core::Vector6d fm;  // [F; M] in the sensor frame (core::RobotState's order)
-  fm << Rs.transpose() * w.tail<3>(), Rs.transpose() * w.head<3>();
-  return fm;
+  return w
+      .expressedIn(s.sensor[static_cast<std::size_t>(f)]->getWorldTransform().inverse(),
+                   core::Axes::kSensor)
+      .about(Eigen::Vector3d::Zero());
 }
 
 core::RobotState Simulator::state() const {
@@ -674,12 +671,12 @@ core::RobotState Simulator::state() const {
   }
   for (int f = 0; f < 2; ++f) {
     const auto& h = s.ft_hist[static_cast<std::size_t>(f)];
-    const core::Vector6d fm =
-        s.torque_filled > 0
-            ? core::Vector6d(h.leftCols(s.torque_filled).rowwise().sum() / s.torque_filled)
-            : sensorWrench(f);
-    const auto& fx = s.truth.ft[static_cast<std::size_t>(f)];
-    (f == 0 ? st.ft_right : st.ft_left) = fx.scale * fm + fx.bias;
+    const core::Wrench w = s.torque_filled > 0
+                               ? core::Wrench::fromForceMoment(
+                                     h.leftCols(s.torque_filled).rowwise().sum() / s.torque_filled,
+                                     core::Axes::kSensor)
+                               : sensorWrench(f);
+    (f == 0 ? st.ft_right : st.ft_left) = s.truth.ft[static_cast<std::size_t>(f)].measured(w);
   }
   const Eigen::Vector3d g(0.0, 0.0, -s.model.description().gravity);
   const Eigen::Isometry3d Xi = s.imu->getWorldTransform();

@@ -47,8 +47,8 @@ std::vector<int> jointsOf(const YAML::Node& n, const std::string& key, const Rea
 
 bool TruthEffects::none() const {
   return !elastic_changed && viscous.isZero() && coulomb.isZero() && backlash.isZero() &&
-         payloads.empty() && command_delay == 0.0 && command_lag == 0.0 && ft[0].bias.isZero() &&
-         ft[1].bias.isZero() && ft[0].scale == 1.0 && ft[1].scale == 1.0 && bends.empty();
+         payloads.empty() && command_delay == 0.0 && command_lag == 0.0 && ft[0].isIdentity() &&
+         ft[1].isIdentity() && bends.empty();
 }
 
 std::string TruthEffects::describe() const {
@@ -66,11 +66,10 @@ std::string TruthEffects::describe() const {
     s << "bend: " << b.link << " rotated by [" << b.rotation.transpose() << "] rad\n";
   if (command_delay > 0.0 || command_lag > 0.0)
     s << "command: delay " << command_delay << " s, lag " << command_lag << " s\n";
-  for (int f = 0; f < 2; ++f)
-    if (!ft[static_cast<std::size_t>(f)].bias.isZero() ||
-        ft[static_cast<std::size_t>(f)].scale != 1.0)
-      s << (f == 0 ? "right" : "left") << " F/T: scale " << ft[static_cast<std::size_t>(f)].scale
-        << ", bias [" << ft[static_cast<std::size_t>(f)].bias.transpose() << "]\n";
+  for (std::size_t f = 0; f < 2; ++f)
+    if (!ft[f].isIdentity())
+      s << (f == 0 ? "right" : "left") << " F/T: scale " << ft[f].scale << ", bias [F; M] ["
+        << ft[f].bias.forceMoment().transpose() << "]\n";
   return s.str();
 }
 
@@ -153,15 +152,7 @@ static TruthEffects loadTruthFile(const std::string& path, const robots::WholeBo
   }
   if (const YAML::Node c = root["command"])
     core::parseCommandTiming(c, r, t.command_delay, t.command_lag);
-  if (const YAML::Node f = root["ft_sensor"]) {
-    std::array<core::Vector6d, 2> bias{{t.ft[0].bias, t.ft[1].bias}};
-    std::array<double, 2> scale{{t.ft[0].scale, t.ft[1].scale}};
-    core::parseForceSensors(f, r, bias, scale);
-    for (std::size_t i = 0; i < 2; ++i) {
-      t.ft[i].bias = bias[i];
-      t.ft[i].scale = scale[i];
-    }
-  }
+  if (const YAML::Node f = root["ft_sensor"]) core::parseForceSensors(f, r, t.ft);
   return t;
 }
 

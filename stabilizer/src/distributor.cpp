@@ -285,10 +285,12 @@ Distribution distributeWrench(const Eigen::Vector2d& zmp, const Eigen::Vector3d&
     d.zmp += share[f] * d.cop_world[fi];
     const Eigen::Isometry3d& X = sole_pose[fi];
     const Eigen::Vector3d P(d.cop_world[fi].x(), d.cop_world[fi].y(), X.translation().z());
-    core::Vector6d w_P;  // about the CoP, world frame
-    w_P << 0.0, 0.0, share[f] * mz, share[f] * force;
-    const core::Vector6d w_S = core::shiftWrench(w_P, P, X.translation());
-    d.wrench[fi] << X.linear().transpose() * w_S.head<3>(), X.linear().transpose() * w_S.tail<3>();
+    const core::Wrench w_P(share[f] * force, Eigen::Vector3d(0.0, 0.0, share[f] * mz), P,
+                           core::Axes::kWorld);
+    const core::Wrench w_W = w_P.about(X.translation());
+    d.wrench[fi] =
+        core::Wrench(X.linear().transpose() * w_W.force, X.linear().transpose() * w_W.moment,
+                     Eigen::Vector3d::Zero(), core::Axes::kSole);
   }
   d.error = (d.zmp - zmp).norm();
   return d;

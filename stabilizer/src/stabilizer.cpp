@@ -189,12 +189,12 @@ Fault Stabilizer::validateInputs(const Measurement& m, double dt) const {
             finiteFixed(r.zmp) && finiteFixed(r.zmp_vel) && finiteFixed(r.zmp_wholebody) &&
             finiteFixed(r.zmp_wholebody_vel) && std::isfinite(r.ground_z) && finiteQuat(r.torso) &&
             r.com.z() - r.ground_z > 0.05;
-  for (const auto& f : r.foot) ok = ok && finitePose(f.pose) && finiteFixed(f.wrench);
+  for (const auto& f : r.foot) ok = ok && finitePose(f.pose) && f.wrench.allFinite();
   if (!ok) return Fault::NonFiniteReference;
   if (!r.foot[0].contact && !r.foot[1].contact) return Fault::NoSupport;
   bool mok = finiteFixed(m.com) && finiteFixed(m.com_vel) && finiteQuat(m.torso);
   for (std::size_t f = 0; f < 2; ++f)
-    mok = mok && finiteFixed(m.foot_wrench[f]) && finitePose(m.foot_pose[f]);
+    mok = mok && m.foot_wrench[f].allFinite() && finitePose(m.foot_pose[f]);
   if (!mok) return Fault::NonFiniteMeasurement;
   if ((m.com - r.com).head<2>().norm() > params_.max_com_error) return Fault::ComErrorTooLarge;
   const Eigen::Vector3d z = m.torso.normalized() * Eigen::Vector3d::UnitZ();
@@ -223,7 +223,7 @@ void Stabilizer::landing(const std::array<double, 2>& fz, double dt, Output& o) 
     if (p.landing_damping > 0.0) {
       if (window && !found_[f]) {
         // Late: lowered onto the ground at the rate its planned force asks for.
-        const double fz_d = std::max(o.distribution.wrench[f](5), p.contact_force);
+        const double fz_d = std::max(o.distribution.wrench[f].force.z(), p.contact_force);
         rate = -fz_d / p.landing_damping;
       } else if (!contact && loaded) {
         // Early (the reference has the foot in the air): yields, its desired force being 0.
@@ -245,17 +245,17 @@ void Stabilizer::runFeedback(const Measurement& m, double dt, Output& o) {
   const double omega = std::sqrt(p.gravity / h);
 
   // Measured ZMP from the foot wrenches.
-  core::Vector6d w_sum = core::Vector6d::Zero();
+  core::Wrench w_sum = core::Wrench::zero(core::Axes::kWorld);  // about the world origin
   std::array<double, 2> fz{{0.0, 0.0}};
   for (std::size_t f = 0; f < 2; ++f) {
-    fz[f] = m.foot_wrench[f](5);
-    if (fz[f] > 0.0) w_sum += core::transformWrench(m.foot_pose[f], m.foot_wrench[f]);
+    fz[f] = m.foot_wrench[f].force.z();
+    if (fz[f] > 0.0) w_sum += m.foot_wrench[f].expressedIn(m.foot_pose[f], core::Axes::kWorld);
   }
   const bool whole_body = p.zmp_reference == ZmpReference::WholeBody;
   const Eigen::Vector2d& zmp_ref = whole_body ? r.zmp_wholebody : r.zmp;
   const Eigen::Vector2d& zmp_ref_vel = whole_body ? r.zmp_wholebody_vel : r.zmp_vel;
   o.zmp_reference = zmp_ref;
-  const bool have_zmp = w_sum(5) > p.contact_force;
+  const bool have_zmp = w_sum.force.z() > p.contact_force;
   o.zmp_measured = have_zmp ? core::zmpFromWrench(w_sum, r.ground_z) : zmp_ref;
   if (!have_zmp) sat |= kNoMeasuredZmp;
 
@@ -279,10 +279,11 @@ void Stabilizer::runFeedback(const Measurement& m, double dt, Output& o) {
 
   // 2. Distribution over the measured feet with the plan's force share as the preference.
   const std::array<bool, 2> contact{{r.foot[0].contact, r.foot[1].contact}};
-  const double fr = std::max(r.foot[0].wrench(5), 0.0), fl = std::max(r.foot[1].wrench(5), 0.0);
+  const double fr = std::max(r.foot[0].wrench.force.z(), 0.0);
+  const double fl = std::max(r.foot[1].wrench.force.z(), 0.0);
   const double alpha_pref = fr + fl > 1e-6 ? fr / (fr + fl) : 0.5;
   const Eigen::Vector3d force = p.mass * (r.com_acc + Eigen::Vector3d(0.0, 0.0, p.gravity));
-  const double mz = r.foot[0].wrench(2) + r.foot[1].wrench(2);
+  const double mz = r.foot[0].wrench.moment.z() + r.foot[1].wrench.moment.z();
   o.distribution = distributeWrench(u, force, mz, contact, m.foot_pose, p.sole, p.cop_margin,
                                     p.min_ds_force, alpha_pref);
   o.zmp_desired = o.distribution.zmp;
@@ -294,9 +295,10 @@ void Stabilizer::runFeedback(const Measurement& m, double dt, Output& o) {
     Eigen::Vector2d& th = o.foot_rotation[f];
     for (int a = 0; a < 2; ++a) {
       const double D = a == 0 ? p.damping_roll : p.damping_pitch;
-      const double rate = loaded ? (m.foot_wrench[f](a) - o.distribution.wrench[f](a)) / D -
-                                       th(a) / p.damping_time_constant
-                                 : -th(a) / p.swing_time_constant;
+      const double rate =
+          loaded ? (m.foot_wrench[f].moment(a) - o.distribution.wrench[f].moment(a)) / D -
+                       th(a) / p.damping_time_constant
+                 : -th(a) / p.swing_time_constant;
       th(a) = integrateClamped(th(a), rate, dt, p.max_foot_rotation_rate, p.max_foot_rotation, sat,
                                kFootRotationRate, kFootRotation);
     }
@@ -308,7 +310,7 @@ void Stabilizer::runFeedback(const Measurement& m, double dt, Output& o) {
   double zrate = -z / p.force_difference_time_constant;
   if (contact[0] && contact[1] && fz[0] > p.contact_force && fz[1] > p.contact_force) {
     const double dF = fz[1] - fz[0];
-    const double dF_d = o.distribution.wrench[1](5) - o.distribution.wrench[0](5);
+    const double dF_d = o.distribution.wrench[1].force.z() - o.distribution.wrench[0].force.z();
     zrate += p.force_difference_gain * (dF - dF_d);
   }
   z = integrateClamped(z, zrate, dt, 0.0, 2.0 * p.max_foot_height, sat, 0, kFootHeight);

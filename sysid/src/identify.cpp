@@ -160,7 +160,7 @@ Identification identify(const Dataset& data, const core::Plan& plan,
     Eigen::Vector3d F_meas, M_meas, F_pred, M_pred;
     Eigen::Vector3d sensor_p[2];  // sensor origins relative to the reference point
     Eigen::Matrix3d sensor_R[2];
-    Eigen::Matrix<double, 6, 1> foot_meas[2];             // [F; M about the reference point], world
+    Eigen::Vector3d foot_force[2], foot_moment[2];        // each sensor's, moment about the point
     Eigen::Vector3d payload_p = Eigen::Vector3d::Zero();  // payload link origin, relative
     Eigen::Matrix3d payload_R = Eigen::Matrix3d::Identity();
     Eigen::Vector2d torso_meas = Eigen::Vector2d::Zero(), torso_pred = Eigen::Vector2d::Zero();
@@ -237,9 +237,9 @@ Identification identify(const Dataset& data, const core::Plan& plan,
       Ground& gr = ground[static_cast<std::size_t>(k)];
       const Eigen::Vector3d P =
           0.5 * (model.framePose(soles[0]).translation() + model.framePose(soles[1]).translation());
-      const core::Vector6d W = model.contactWrenchFromBase(tau_full);  // [M_O; F]
-      gr.F_pred = W.tail<3>();
-      gr.M_pred = W.head<3>() - P.cross(gr.F_pred);
+      const core::Wrench W = model.contactWrenchFromBase(tau_full).about(P);
+      gr.F_pred = W.force;
+      gr.M_pred = W.moment;
       gr.F_meas.setZero();
       gr.M_meas.setZero();
       for (int f = 0; f < 2; ++f) {
@@ -252,12 +252,12 @@ Identification identify(const Dataset& data, const core::Plan& plan,
         gr.sensor_p[f] = Xs.translation() - P;
         gr.sensor_R[f] = Xs.linear();
         // Readings through the model's calibration (an overlay's identified bias and scale).
-        const Eigen::Matrix<double, 6, 1> ft = d.effects.calibrated(f, r.ft[f]);
-        const Eigen::Vector3d Fw = Xs.linear() * ft.head<3>();
-        const Eigen::Vector3d Mw = Xs.linear() * ft.tail<3>() + gr.sensor_p[f].cross(Fw);
-        gr.foot_meas[f] << Fw, Mw;
-        gr.F_meas += Fw;
-        gr.M_meas += Mw;
+        const core::Wrench w =
+            d.effects.calibrated(f, r.ft[f]).expressedIn(Xs, core::Axes::kWorld).about(P);
+        gr.foot_force[f] = w.force;
+        gr.foot_moment[f] = w.moment;
+        gr.F_meas += w.force;
+        gr.M_meas += w.moment;
       }
       {
         // Torso orientation: measured (IMU) and predicted (encoders, bushings at moment /
@@ -271,8 +271,8 @@ Identification identify(const Dataset& data, const core::Plan& plan,
         // (The static k delta = M left 0.85 mrad RMS of pitch residual on clean data, ~ c delta'.)
         double moment[4], rate[4];
         for (int f = 0; f < 2; ++f) {
-          const Eigen::Matrix<double, 6, 1> ft = d.effects.calibrated(f, r.ft[f]);
-          const double m_axis[2] = {ft(3), ft(4)};  // about the sensor's x (roll), y (pitch)
+          const core::Wrench ft = d.effects.calibrated(f, r.ft[f]);
+          const double m_axis[2] = {ft.moment.x(), ft.moment.y()};  // sensor x (roll), y (pitch)
           for (int ax = 0; ax < 2; ++ax) {
             const int e = 2 * f + ax;
             const auto& ej = d.elastic[static_cast<std::size_t>(e)];
@@ -365,7 +365,8 @@ Identification identify(const Dataset& data, const core::Plan& plan,
         for (int f = 0; f < 2; ++f) {
           a.sensor_p[f] += b.sensor_p[f];
           a.sensor_R[f] += b.sensor_R[f];
-          a.foot_meas[f] += b.foot_meas[f];
+          a.foot_force[f] += b.foot_force[f];
+          a.foot_moment[f] += b.foot_moment[f];
         }
       }
       const double inv = 1.0 / gw;
@@ -384,7 +385,8 @@ Identification identify(const Dataset& data, const core::Plan& plan,
       for (int f = 0; f < 2; ++f) {
         a.sensor_p[f] *= inv;
         a.sensor_R[f] *= inv;
-        a.foot_meas[f] *= inv;
+        a.foot_force[f] *= inv;
+        a.foot_moment[f] *= inv;
       }
     }
   for (int i = 0; i < R; ++i) {
@@ -701,12 +703,12 @@ Identification identify(const Dataset& data, const core::Plan& plan,
         scale.X(i, 0) = gr.torso_ft[f](w.joint, 0);
       } else if (w.channel == 2) {
         bias.X(i, 0) = Rs(2, 2);
-        scale.X(i, 0) = gr.foot_meas[f](2);
+        scale.X(i, 0) = gr.foot_force[f].z();
       } else {
         bias.X(i, 0) = gr.sensor_p[f].cross(Rs.col(2))(w.joint);
         bias.X(i, 1) = Rs(w.joint, 0);
         bias.X(i, 2) = Rs(w.joint, 1);
-        scale.X(i, 0) = gr.foot_meas[f](3 + w.joint);
+        scale.X(i, 0) = gr.foot_moment[f](w.joint);
       }
     }
     cands.push_back(std::move(bias));

@@ -75,21 +75,21 @@ std::string overlayYaml(const Identification& r, const core::RobotDescription& d
   } else if (r.effect.rfind("ft_bias_", 0) == 0 || r.effect.rfind("ft_scale_", 0) == 0) {
     const bool left = r.effect.size() >= 4 && r.effect.substr(r.effect.size() - 4) == "left";
     const std::size_t f = left ? 1 : 0;
-    Eigen::Matrix<double, 6, 1> bias = e.ft_bias[f];
-    double scale = e.ft_scale[f];
+    core::ForceSensorModel sensor = e.ft[f];
     if (r.effect.rfind("ft_bias_", 0) == 0) {
       // Identified on calibrated readings: measured = s (true + b_new) + b_old.
-      Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
-      b(2) = param(r, "fz_bias");
-      b(3) = param(r, "mx_bias");
-      b(4) = param(r, "my_bias");
-      bias += scale * b;
+      core::Wrench b = core::Wrench::zero(core::Axes::kSensor);
+      b.force.z() = param(r, "fz_bias");
+      b.moment.x() = param(r, "mx_bias");
+      b.moment.y() = param(r, "my_bias");
+      sensor.bias += sensor.scale * b;
     } else {
-      scale *= 1.0 + param(r, "scale_minus_1");
+      sensor.scale *= 1.0 + param(r, "scale_minus_1");
     }
+    const core::Vector6d bias = sensor.bias.forceMoment();
     y << "ft_sensor:\n  " << (left ? "left" : "right") << ": {bias: [";
     for (int i = 0; i < 6; ++i) y << (i ? ", " : "") << num(bias(i));
-    y << "], scale: " << num(scale) << "}\n";
+    y << "], scale: " << num(sensor.scale) << "}\n";
   } else if (r.effect == "backlash") {
     // One width for the joints whose gain is significant (recorded: no model uses it yet).
     y << "backlash:\n";

@@ -18,8 +18,9 @@ void run(benchmark::State& state, bool double_support, const Eigen::Vector2d& zm
       double_support ? Eigen::Vector2d(0.0, 0.0) : Eigen::Vector2d(0.0, -0.095), feet,
       {{true, double_support}});
   if (double_support) {
-    ref.foot[0].wrench(5) = pref_right_share * overstep::test::kMass * overstep::test::kG;
-    ref.foot[1].wrench(5) = (1 - pref_right_share) * overstep::test::kMass * overstep::test::kG;
+    ref.foot[0].wrench.force.z() = pref_right_share * overstep::test::kMass * overstep::test::kG;
+    ref.foot[1].wrench.force.z() =
+        (1 - pref_right_share) * overstep::test::kMass * overstep::test::kG;
   }
   st::Stabilizer s(p);
   s.setReference(ref);

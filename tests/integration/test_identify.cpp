@@ -196,7 +196,7 @@ TEST_F(Identify, ArmCoulombFrictionIsIdentified) {
 TEST_F(Identify, ForceSensorBiasIsNamed) {
   for (double b : {10.0, 20.0}) {
     sim::TruthEffects t = sim::noTruthEffects(*model_);
-    t.ft[1].bias(2) = b;  // left sensor, Fz
+    t.ft[1].bias.force.z() = b;  // left sensor
     const auto r = run(t, 17);
     std::printf("left Fz bias %g N: %s\n", b, describe(r).c_str());
     // In double support the normal-force biases of the two sensors are confusable (and a scale

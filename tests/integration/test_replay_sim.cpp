@@ -45,12 +45,11 @@ LoopResult runLoop(const core::Plan& plan, const stabilizer::Params& params, boo
     const bool executing =
         o.state == runtime::State::Running || o.state == runtime::State::Finished;
     for (int f = 0; f < 2; ++f) {
-      const core::Vector6d w =
-          track.soleWrench(o.sample.index, f, f == 0 ? st.ft_right : st.ft_left);
-      const double cop = std::max(std::abs(w(1) / w(5)), std::abs(w(0) / w(5)));
+      const core::Wrench w = track.soleWrench(o.sample.index, f, f == 0 ? st.ft_right : st.ft_left);
+      const double cop = core::localCop(w, 0.0).cwiseAbs().maxCoeff();
       if (executing) {
         r.cop_max[f] = std::max(r.cop_max[f], cop);
-        r.load_min = std::min(r.load_min, w(5));
+        r.load_min = std::min(r.load_min, w.force.z());
       }
       r.cop_final[f] = cop;
     }

@@ -31,18 +31,13 @@ inline core::RobotState perfectState(robots::WholeBodyModel& m, const core::Plan
     const auto* foot = d.foot(f == 0 ? "right" : "left");
     const int sensor = m.frameIndex(foot->force_sensor_frame);
     const Eigen::Isometry3d Xs = m.framePose(sensor);
-    const Eigen::Vector3d p = (f == 0 ? plan.right_foot : plan.left_foot).col(k).head<3>();
-    const core::Vector6d w = (f == 0 ? plan.right_wrench : plan.left_wrench).col(k);
-    Eigen::Vector3d F = w.tail<3>();
-    Eigen::Vector3d M = w.head<3>() + (p - Xs.translation()).cross(F);
+    // The sensor carries the contact wrench and the weight of the bodies below it.
     Eigen::Vector3d c;
     const double mb = m.massBelow(sensor, &c);
-    const Eigen::Vector3d weight(0, 0, -mb * d.gravity);
-    F += weight;
-    M += (c - Xs.translation()).cross(weight);
-    core::Vector6d fm;
-    fm << Xs.linear().transpose() * F, Xs.linear().transpose() * M;
-    (f == 0 ? st.ft_right : st.ft_left) = fm;
+    const core::Wrench weight({0, 0, -mb * d.gravity}, Eigen::Vector3d::Zero(), c,
+                              core::Axes::kWorld);
+    (f == 0 ? st.ft_right : st.ft_left) =
+        (plan.wrench(f, k) + weight).inFrame(Xs, core::Axes::kSensor);
   }
   st.imu_orientation = Eigen::Quaterniond(m.framePose(m.frameIndex("imu")).linear());
   return st;

@@ -46,8 +46,8 @@ inline stabilizer::Reference staticReference(const Eigen::Vector2d& zmp,
   for (std::size_t f = 0; f < 2; ++f) {
     r.foot[f].contact = contact[f];
     r.foot[f].pose = feet[f];
-    r.foot[f].wrench.setZero();
-    if (contact[f]) r.foot[f].wrench(5) = kMass * kG / n;
+    r.foot[f].wrench = overstep::core::Wrench::zero(overstep::core::Axes::kSole);
+    if (contact[f]) r.foot[f].wrench.force.z() = kMass * kG / n;
   }
   return r;
 }
@@ -66,8 +66,9 @@ inline stabilizer::Measurement measurementWithZmp(const Eigen::Vector3d& com,
   const auto fi = static_cast<std::size_t>(f);
   const Eigen::Vector2d local = (feet[fi].inverse() * Eigen::Vector3d(p.x(), p.y(), 0.0)).head<2>();
   const double fz = kMass * kG;
-  m.foot_wrench[fi] << local.y() * fz, -local.x() * fz, 0.0, 0.0, 0.0, fz;
-  m.foot_wrench[1 - fi].setZero();
+  m.foot_wrench[fi] = overstep::core::Wrench({0.0, 0.0, fz}, {local.y() * fz, -local.x() * fz, 0.0},
+                                             Eigen::Vector3d::Zero(), overstep::core::Axes::kSole);
+  m.foot_wrench[1 - fi] = overstep::core::Wrench::zero(overstep::core::Axes::kSole);
   return m;
 }
 
@@ -113,8 +114,10 @@ struct FlexAnklePendulum {
     meas.com_vel << l * phid, 0.0, 0.0;
     meas.foot_pose = feet;
     const double fz = m * kG;
-    meas.foot_wrench[0] << 0.0, tau(theta, thetad), 0.0, 0.0, 0.0, fz;
-    meas.foot_wrench[1].setZero();
+    meas.foot_wrench[0] =
+        overstep::core::Wrench({0.0, 0.0, fz}, {0.0, tau(theta, thetad), 0.0},
+                               Eigen::Vector3d::Zero(), overstep::core::Axes::kSole);
+    meas.foot_wrench[1] = overstep::core::Wrench::zero(overstep::core::Axes::kSole);
     return meas;
   }
 };

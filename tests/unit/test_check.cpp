@@ -106,7 +106,11 @@ TEST_F(Check, PassiveCoordinateOffItsDynamicsIsNamed) {
 
 TEST_F(Check, WrenchesThatDoNotCarryTheWeightAreNamed) {
   core::Plan p = *plan_;
-  p.left_wrench.row(5) *= 0.5;
+  for (int k = 0; k < p.samples(); ++k) {
+    core::Wrench w = p.wrench(1, k);
+    w.force.z() *= 0.5;
+    p.setWrench(1, k, w);
+  }
   const CheckReport r = checkPlan(p, *model_);
   EXPECT_FALSE(r.family("dynamics")->ok());
   EXPECT_EQ(r.family("dynamics")->detail, "base force");

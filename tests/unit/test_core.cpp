@@ -262,45 +262,102 @@ TEST(RobotDescription, RejectsMissingFile) {
 }
 
 TEST(Wrench, ZmpOfPureForceIsItsLineOfAction) {
-  // A vertical force of 500 N through (0.1, -0.2, 0) seen about the world origin.
+  // A vertical force of 500 N through (0.1, -0.2, 0), seen about that point and about others.
   const Eigen::Vector3d p(0.1, -0.2, 0.0);
-  core::Vector6d w_p;
-  w_p << 0, 0, 0, 0, 0, 500;
-  const core::Vector6d w_O = core::shiftWrench(w_p, p, Eigen::Vector3d::Zero());
-  const Eigen::Vector2d z = core::zmpFromWrench(w_O);
-  EXPECT_NEAR(z.x(), 0.1, 1e-12);
-  EXPECT_NEAR(z.y(), -0.2, 1e-12);
+  const core::Wrench w_p({0, 0, 500}, Eigen::Vector3d::Zero(), p, core::Axes::kWorld);
+  for (const Eigen::Vector3d& q :
+       std::vector<Eigen::Vector3d>{Eigen::Vector3d::Zero(), Eigen::Vector3d(0.3, 0.4, 0.9)}) {
+    const Eigen::Vector2d z = core::zmpFromWrench(w_p.about(q));
+    EXPECT_NEAR(z.x(), 0.1, 1e-12);
+    EXPECT_NEAR(z.y(), -0.2, 1e-12);
+  }
 }
 
 TEST(Wrench, ZmpOnRaisedGroundAccountsForShear) {
   // Force with shear through (0.05, 0.02, 0.1): the ZMP on z = 0.1 is that point.
   const Eigen::Vector3d p(0.05, 0.02, 0.1);
-  core::Vector6d w_p;
-  w_p << 0, 0, 0, 30, -20, 400;
-  const core::Vector6d w_O = core::shiftWrench(w_p, p, Eigen::Vector3d::Zero());
-  const Eigen::Vector2d z = core::zmpFromWrench(w_O, 0.1);
+  const core::Wrench w_p({30, -20, 400}, Eigen::Vector3d::Zero(), p, core::Axes::kWorld);
+  const Eigen::Vector2d z = core::zmpFromWrench(w_p.about(Eigen::Vector3d::Zero()), 0.1);
   EXPECT_NEAR(z.x(), 0.05, 1e-12);
   EXPECT_NEAR(z.y(), 0.02, 1e-12);
 }
 
 TEST(Wrench, NoNormalForceGivesNaN) {
-  core::Vector6d w = core::Vector6d::Zero();
-  EXPECT_TRUE(core::zmpFromWrench(w).hasNaN());
-  EXPECT_TRUE(core::localCop(w).hasNaN());
+  EXPECT_TRUE(core::zmpFromWrench(core::Wrench::zero(core::Axes::kWorld)).hasNaN());
+  EXPECT_TRUE(core::localCop(core::Wrench::zero(core::Axes::kSole)).hasNaN());
 }
 
-TEST(Wrench, TransformMatchesShiftAndRotation) {
-  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
-  X.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
-  X.translation() << 0.2, -0.1, 0.4;
-  core::Vector6d w_F;
-  w_F << 1, -2, 3, 10, 20, 300;
-  const core::Vector6d w_W = core::transformWrench(X, w_F);
-  // Rotated force, torque about W's origin = R tau + p x (R f).
-  EXPECT_TRUE(w_W.tail<3>().isApprox(X.linear() * w_F.tail<3>()));
-  const Eigen::Vector3d expect =
-      X.linear() * w_F.head<3>() + X.translation().cross(X.linear() * w_F.tail<3>());
-  EXPECT_TRUE(w_W.head<3>().isApprox(expect));
+TEST(Wrench, OrderingsAreStatedAtTheBoundaries) {
+  core::Vector6d fm;
+  fm << 1, 2, 3, 4, 5, 6;  // [F; M], the sensors' and the files' order
+  const core::Wrench w = core::Wrench::fromForceMoment(fm, core::Axes::kSensor);
+  EXPECT_EQ(w.force, Eigen::Vector3d(1, 2, 3));
+  EXPECT_EQ(w.moment, Eigen::Vector3d(4, 5, 6));
+  EXPECT_EQ(w.forceMoment(), fm);
+  core::Vector6d mf;
+  mf << 4, 5, 6, 1, 2, 3;  // [M; F], DART's spatial order
+  EXPECT_EQ(w.spatial(), mf);
+  const core::Wrench back = core::Wrench::fromSpatial(mf, core::Axes::kSensor);
+  EXPECT_EQ(back.force, w.force);
+  EXPECT_EQ(back.moment, w.moment);
+  EXPECT_STREQ(core::axesName(w.axes), "sensor");
+}
+
+TEST(Wrench, ExpressedInRotatesAndMapsThePointAndInFrameUndoesIt) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    Eigen::Isometry3d X_WF = Eigen::Isometry3d::Identity();
+    X_WF.linear() =
+        Eigen::AngleAxisd(3 * u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized())
+            .toRotationMatrix();
+    X_WF.translation() << u(rng), u(rng), u(rng);
+    const core::Wrench w_F({10 * u(rng), 10 * u(rng), 100 * u(rng)}, {u(rng), u(rng), u(rng)},
+                           Eigen::Vector3d::Zero(), core::Axes::kSole);
+    const core::Wrench w_W = w_F.expressedIn(X_WF, core::Axes::kWorld);
+    EXPECT_EQ(w_W.axes, core::Axes::kWorld);
+    EXPECT_LT((w_W.force - X_WF.linear() * w_F.force).norm(), 1e-12);
+    EXPECT_LT((w_W.point - X_WF.translation()).norm(), 1e-12);
+    // About the world origin: R m + p x (R f).
+    const core::Wrench w_O = w_W.about(Eigen::Vector3d::Zero());
+    const Eigen::Vector3d expect =
+        X_WF.linear() * w_F.moment + X_WF.translation().cross(X_WF.linear() * w_F.force);
+    EXPECT_LT((w_O.moment - expect).norm(), 1e-12);
+    // Back to the frame from any reference point.
+    const core::Wrench back = w_O.inFrame(X_WF, core::Axes::kSole);
+    EXPECT_EQ(back.axes, core::Axes::kSole);
+    EXPECT_TRUE(back.point.isZero(0.0));
+    EXPECT_LT((back.force - w_F.force).norm(), 1e-12);
+    EXPECT_LT((back.moment - w_F.moment).norm(), 1e-11);
+  }
+}
+
+TEST(Wrench, SumsTakeEveryMomentAboutOnePoint) {
+  // Two vertical 100 N forces at x = +-0.1 balance about the origin; about x = 0.1 they do not.
+  const core::Wrench a({0, 0, 100}, Eigen::Vector3d::Zero(), {0.1, 0, 0}, core::Axes::kWorld);
+  const core::Wrench b({0, 0, 100}, Eigen::Vector3d::Zero(), {-0.1, 0, 0}, core::Axes::kWorld);
+  const core::Wrench sum = core::Wrench::zero(core::Axes::kWorld) + a + b;
+  EXPECT_LT(sum.moment.norm(), 1e-12);
+  EXPECT_DOUBLE_EQ(sum.force.z(), 200.0);
+  const core::Wrench sum_a = a + b;  // about a's point
+  EXPECT_NEAR(sum_a.moment.y(), 100.0 * 0.2, 1e-12);
+  // Whatever point it is taken about, the sum is the same wrench.
+  EXPECT_LT((sum_a.about(Eigen::Vector3d::Zero()).moment - sum.moment).norm(), 1e-12);
+  EXPECT_LT(((a - a).force).norm() + (a - a).moment.norm(), 1e-15);
+}
+
+TEST(Wrench, ForceSensorCalibrationInvertsTheMeasurement) {
+  core::ForceSensorModel s;
+  EXPECT_TRUE(s.isIdentity());
+  s.scale = 1.05;
+  s.bias.force << 1.0, -2.0, 10.0;
+  s.bias.moment << 0.1, -0.2, 0.3;
+  EXPECT_FALSE(s.isIdentity());
+  const core::Wrench truth({5, 6, 400}, {1, -2, 0.5}, Eigen::Vector3d::Zero(), core::Axes::kSensor);
+  const core::Wrench m = s.measured(truth);
+  EXPECT_NEAR(m.force.z(), 1.05 * 400 + 10.0, 1e-12);
+  const core::Wrench back = s.calibrated(m);
+  EXPECT_LT((back.force - truth.force).norm() + (back.moment - truth.moment).norm(), 1e-12);
 }
 
 TEST(Wrench, TableCartZmpOfStaticComIsItsProjection) {

@@ -62,13 +62,12 @@ TEST(Fidelity, LocalCopIsWhereAPointForceWithTheSameWrenchActs) {
   for (int i = 0; i < 100; ++i) {
     const Eigen::Vector3d p(0.1 * u(rng), 0.07 * u(rng), 0.0);  // on the sole
     const Eigen::Vector3d F(60 * u(rng), 60 * u(rng), 300 + 200 * u(rng));
-    core::Vector6d w;
-    w << p.cross(F), F;  // [M; F] about the sole origin
-    EXPECT_LT((localCop(w, 10.0) - p.head<2>()).norm(), 1e-12) << w.transpose();
+    const core::Wrench w(F, p.cross(F), Eigen::Vector3d::Zero(), core::Axes::kSole);
+    EXPECT_LT((loadedCop(w, 10.0) - p.head<2>()).norm(), 1e-12) << w.forceMoment().transpose();
   }
-  core::Vector6d unloaded;
-  unloaded << 1.0, 1.0, 0.0, 0.0, 0.0, 5.0;
-  EXPECT_TRUE(localCop(unloaded, 10.0).hasNaN());
+  const core::Wrench unloaded({0.0, 0.0, 5.0}, {1.0, 1.0, 0.0}, Eigen::Vector3d::Zero(),
+                              core::Axes::kSole);
+  EXPECT_TRUE(loadedCop(unloaded, 10.0).hasNaN());
 }
 
 TEST(Fidelity, AStandingRunAsPlannedMeetsEveryTarget) {

@@ -124,8 +124,10 @@ TEST(MsgsConvert, StateRoundTripAndValidation) {
   s.resize(30);
   s.seq = 77;
   s.q.setLinSpaced(30, -1.0, 1.0);
-  s.ft_right << 1, 2, 300, 4, 5, 6;
-  s.ft_left << -1, -2, 250, -4, -5, -6;
+  s.ft_right.force << 1, 2, 300;
+  s.ft_right.moment << 4, 5, 6;
+  s.ft_left.force << -1, -2, 250;
+  s.ft_left.moment << -4, -5, -6;
   s.imu_orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY()));
   s.has_ground_truth = true;
   s.base_pose.translation() << 0.1, 0.0, 0.65;
@@ -136,8 +138,17 @@ TEST(MsgsConvert, StateRoundTripAndValidation) {
   ASSERT_TRUE(msgs::fromLcm(m, 30, back, &why)) << why;
   EXPECT_EQ(back.seq, 77);
   EXPECT_EQ(back.q, s.q);
-  EXPECT_EQ(back.ft_right, s.ft_right);
-  EXPECT_EQ(back.ft_left, s.ft_left);
+  EXPECT_EQ(back.ft_right.forceMoment(), s.ft_right.forceMoment());
+  EXPECT_EQ(back.ft_left.forceMoment(), s.ft_left.forceMoment());
+  EXPECT_EQ(back.ft_left.axes, core::Axes::kSensor);
+  // The message's order is [Fx Fy Fz Mx My Mz].
+  EXPECT_EQ(m.ft_left[2], 250.0);
+  EXPECT_EQ(m.ft_left[3], -4.0);
+  // A reading about another point goes out about the sensor origin.
+  s.ft_right.point << 0.0, 0.0, 0.1;
+  msgs::toLcm(s, m);
+  EXPECT_NEAR(m.ft_right[3], 4.0 + 0.1 * -2.0, 1e-12);  // M_x + (p x F)_x = M_x - p_z F_y
+  s.ft_right.point.setZero();
   EXPECT_TRUE(back.imu_orientation.isApprox(s.imu_orientation, 1e-12));
   EXPECT_TRUE(back.base_pose.isApprox(s.base_pose, 1e-12));
   m.imu_quaternion[0] = 3.0;  // not a rotation

@@ -38,18 +38,17 @@ TEST(Overlay, LoadsEveryEffectOnTopOfTheBase) {
   EXPECT_DOUBLE_EQ(d.effects.viscous(d.actuatedIndex("LARM_JOINT0")), 3.0);
   EXPECT_DOUBLE_EQ(d.effects.viscous(d.actuatedIndex("RARM_JOINT1")), 0.0);
   EXPECT_DOUBLE_EQ(d.effects.command_delay, 0.015);
-  EXPECT_DOUBLE_EQ(d.effects.ft_bias[1](2), 10.0);
-  EXPECT_DOUBLE_EQ(d.effects.ft_scale[1], 1.05);
-  EXPECT_DOUBLE_EQ(d.effects.ft_scale[0], 1.0);
+  EXPECT_DOUBLE_EQ(d.effects.ft[1].bias.force.z(), 10.0);  // the file's [F; M], third entry
+  EXPECT_DOUBLE_EQ(d.effects.ft[1].scale, 1.05);
+  EXPECT_DOUBLE_EQ(d.effects.ft[0].scale, 1.0);
   EXPECT_DOUBLE_EQ(
       d.elastic[static_cast<std::size_t>(d.elasticIndex("RLEG_ELASTIC_PITCH"))].stiffness, 450.0);
   EXPECT_FALSE(d.effects.empty());
   EXPECT_TRUE(base.effects.empty());
   // The calibration undoes the sensor model: measured = scale * true + bias.
-  Eigen::Matrix<double, 6, 1> truth;
-  truth << 1, 2, 300, 4, 5, 6;
-  const Eigen::Matrix<double, 6, 1> measured = 1.05 * truth + d.effects.ft_bias[1];
-  EXPECT_LT((d.effects.calibrated(1, measured) - truth).norm(), 1e-12);
+  const core::Wrench truth({1, 2, 300}, {4, 5, 6}, Eigen::Vector3d::Zero(), core::Axes::kSensor);
+  const core::Wrench measured = 1.05 * truth + d.effects.ft[1].bias;
+  EXPECT_LT((d.effects.calibrated(1, measured) - truth).forceMoment().norm(), 1e-12);
 }
 
 TEST(Overlay, BadOverlaysNameTheKey) {
@@ -131,8 +130,8 @@ TEST(Overlay, IdentificationBecomesAnOverlayThatLoadsBack) {
   core::writeFileAtomic(second, sysid::overlayYaml(b, d1, second, "test"));
   const core::RobotDescription d2 = core::loadRobotDescription(second);
   EXPECT_EQ(d2.base_yaml, first);
-  EXPECT_NEAR(d2.effects.ft_bias[1](2), 10.0 + 1.1 * 4.0, 1e-6);
-  EXPECT_NEAR(d2.effects.ft_scale[1], 1.1, 1e-12);
+  EXPECT_NEAR(d2.effects.ft[1].bias.force.z(), 10.0 + 1.1 * 4.0, 1e-6);
+  EXPECT_NEAR(d2.effects.ft[1].scale, 1.1, 1e-12);
 
   sysid::Identification none;
   none.verdict = "none";

@@ -807,7 +807,7 @@ double elasticResidual(const core::Plan& p, bool single_support_only = false) {
     if (single_support_only && ph.right_contact && ph.left_contact) continue;
     m.setState(p.q.col(k), p.v.col(k), p.a.col(k));
     const Eigen::VectorXd tau = m.torquesInContact(
-        m.inverseDynamics(), {{sole[0], p.right_wrench.col(k)}, {sole[1], p.left_wrench.col(k)}});
+        m.inverseDynamics(), {{sole[0], p.wrench(0, k)}, {sole[1], p.wrench(1, k)}});
     for (int e = 0; e < m.elasticCount(); ++e)
       worst = std::max(worst, std::abs(tau(m.elasticCoordinate(e))));
   }
@@ -874,9 +874,9 @@ TEST_F(Problem, PassivePolishChangesOnlySingleSupportAndKeepsTheLiftOffs) {
   for (int k = 0; k + 1 < p1.samples(); ++k) {
     const int ph = p1.phase(k), next = p1.phase(k + 1);
     if (!((ph == 0 && next == 1) || (ph == 2 && next == 3))) continue;
-    const Eigen::MatrixXd& w1 = ph == 0 ? p1.right_wrench : p1.left_wrench;
-    const Eigen::MatrixXd& w0 = ph == 0 ? p0.right_wrench : p0.left_wrench;
-    EXPECT_LT((w1.col(k) - w0.col(k)).norm(), 1e-6) << "lift-off at t = " << p1.t(k);
+    const int f = ph == 0 ? 0 : 1;
+    EXPECT_LT((p1.wrench(f, k) - p0.wrench(f, k)).forceMoment().norm(), 1e-6)
+        << "lift-off at t = " << p1.t(k);
     for (int e = 0; e < model_->elasticCount(); ++e) {
       const int c = model_->elasticCoordinate(e);
       EXPECT_NEAR(p1.q(c, k), p0.q(c, k), 1e-9) << "t = " << p1.t(k);

@@ -67,7 +67,7 @@ TEST_F(RuntimeTest, TrackSamplesReproduceThePlan) {
       const Eigen::Isometry3d planned = model_->framePose(sole);
       model_->setPositions(q);
       const Eigen::Isometry3d X = model_->framePose(sole);
-      const double dz = s.ref.foot[static_cast<std::size_t>(f)].wrench(5) / kv;
+      const double dz = s.ref.foot[static_cast<std::size_t>(f)].wrench.force.z() / kv;
       EXPECT_GT(dz, 5e-4) << "foot " << f;
       EXPECT_NEAR(X.translation().z(), planned.translation().z() - dz, 2e-5) << "foot " << f;
       EXPECT_LT((X.translation() - planned.translation()).head<2>().norm(), 2e-5) << "foot " << f;
@@ -80,7 +80,7 @@ TEST_F(RuntimeTest, TrackSamplesReproduceThePlan) {
     EXPECT_LT((s.ref.com - plan_->com.col(k)).norm(), 1e-9);
     EXPECT_TRUE(s.ref.foot[0].contact && s.ref.foot[1].contact);
     // The planned wrench in the sole frame: Fz carries the load.
-    EXPECT_NEAR(s.ref.foot[0].wrench(5) + s.ref.foot[1].wrench(5),
+    EXPECT_NEAR(s.ref.foot[0].wrench.force.z() + s.ref.foot[1].wrench.force.z(),
                 model_->totalMass() * model_->description().gravity, 1e-6);
   }
   // Out-of-range and non-finite times clamp.
@@ -126,8 +126,11 @@ TEST_F(RuntimeTest, TrackVelocitiesStaySmoothAcrossAContactSwitch) {
   p.phases.push_back(p.phases.front());
   p.phases.back().name = "after";
   // 5 N more on the right sole just before the switch (and 5 N less on the left).
-  p.right_wrench(5, kb) += 5.0;
-  p.left_wrench(5, kb) -= 5.0;
+  core::Wrench w_r = p.wrench(0, kb), w_l = p.wrench(1, kb);
+  w_r.force.z() += 5.0;
+  w_l.force.z() -= 5.0;
+  p.setWrench(0, kb, w_r);
+  p.setWrench(1, kb, w_l);
   // Both ZMP references move forward at 2 cm/s.
   const double zmp_speed = 0.02;
   for (int k = 0; k < p.samples(); ++k) {
@@ -223,7 +226,9 @@ TEST_F(RuntimeTest, EstimatorRecoversThePlanFromAPerfectRobot) {
   track.estimate(s, st, m);
   EXPECT_LT((m.com - s.ref.com).norm(), 1e-9);
   for (int f = 0; f < 2; ++f)
-    EXPECT_LT((m.foot_wrench[std::size_t(f)] - s.ref.foot[std::size_t(f)].wrench).norm(), 1e-6)
+    EXPECT_LT(
+        (m.foot_wrench[std::size_t(f)] - s.ref.foot[std::size_t(f)].wrench).forceMoment().norm(),
+        1e-6)
         << f;
 }
 
@@ -398,7 +403,8 @@ TEST_F(RuntimeTest, MoveToStartKeepsTheFeetAndTheLimits) {
   // plan's first loads (the legs are lengthened by them over the move).
   const runtime::TrackSample s0 = track.makeSample();
   const double kv = model_->description().bushing_vertical_stiffness;
-  const double dc = std::abs(s0.ref.foot[0].wrench(5) - s0.ref.foot[1].wrench(5)) / kv;
+  const double dc =
+      std::abs(s0.ref.foot[0].wrench.force.z() - s0.ref.foot[1].wrench.force.z()) / kv;
   EXPECT_LT(max_foot_error, dc + 1e-6) << "the feet moved relative to each other during the move";
   // The last moving tick is one step of the quintic's flat end before the plan's first sample.
   EXPECT_LT((prev - track.makeSample().q).norm(), 1e-4);
@@ -467,7 +473,7 @@ TEST_F(RuntimeTest, BadStatesFaultAndHold) {
   const std::vector<Case> cases = {
       {"nan joint", [](core::RobotState& s) { s.q(3) = std::nan(""); },
        FaultReason::NonFiniteState},
-      {"inf force", [](core::RobotState& s) { s.ft_left(2) = INFINITY; },
+      {"inf force", [](core::RobotState& s) { s.ft_left.force.z() = INFINITY; },
        FaultReason::NonFiniteState},
       {"joint beyond limit", [](core::RobotState& s) { s.q(3) = 10.0; }, FaultReason::JointLimit},
       {"wrong size", [](core::RobotState& s) { s.resize(12); }, FaultReason::BadStateSize},

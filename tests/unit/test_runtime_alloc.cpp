@@ -26,7 +26,8 @@ TEST(RuntimeRealTime, TickNeverAllocates) {
   core::RobotState st;
   st.resize(track.joints());
   st.q = plan.q.col(0).segment(6, track.joints());
-  st.ft_right(2) = st.ft_left(2) = 0.5 * model.totalMass() * 9.81;  // sensor z up, loaded
+  st.ft_right.force.z() = st.ft_left.force.z() =
+      0.5 * model.totalMass() * 9.81;  // sensor z up, loaded
   core::RobotState bad = st;
   bad.q(2) = std::nan("");
   int states_seen[6] = {0, 0, 0, 0, 0, 0};

@@ -21,7 +21,7 @@ TEST(Sim, StandsTenSecondsInHalfSittingWithStaticsHolding) {
   const double g = model().description().gravity;
   const double z0 = sim.basePose().translation().z();
   const auto st0 = sim.state();
-  overstep::core::Vector6d sum_late = overstep::core::Vector6d::Zero();
+  auto sum_late = overstep::core::Wrench::zero(overstep::core::Axes::kWorld);
   int n_late = 0;
   for (int i = 0; i < 10000; ++i) {  // 10 s at 1 ms, commands held at the initial posture
     if (i % 5 == 0) sim.setCommand(st0.q, Eigen::VectorXd::Zero(st0.q.size()));
@@ -33,9 +33,9 @@ TEST(Sim, StandsTenSecondsInHalfSittingWithStaticsHolding) {
     }
   }
   EXPECT_NEAR(sim.time(), 10.0, 1e-9);
-  const overstep::core::Vector6d W = sum_late / n_late;
+  const overstep::core::Wrench W = sum_late / n_late;
   const double weight = sim.totalMass() * g;
-  EXPECT_NEAR(W(5), weight, 0.01 * weight) << "ground reaction = weight";
+  EXPECT_NEAR(W.force.z(), weight, 0.01 * weight) << "ground reaction = weight";
   EXPECT_TRUE(sim.contacts().foot_contact[0] && sim.contacts().foot_contact[1]);
   // CoP where statics puts it: under the CoM.
   const Eigen::Vector2d zmp = overstep::core::zmpFromWrench(W);
@@ -43,7 +43,7 @@ TEST(Sim, StandsTenSecondsInHalfSittingWithStaticsHolding) {
   // The F/T sensors carry the weight minus what hangs below them.
   const auto st = sim.state();
   const double expected = (sim.totalMass() - sim.massBelowSensor(0) - sim.massBelowSensor(1)) * g;
-  EXPECT_NEAR(st.ft_right(2) + st.ft_left(2), expected, 0.01 * expected);
+  EXPECT_NEAR(st.ft_right.force.z() + st.ft_left.force.z(), expected, 0.01 * expected);
   // Each bushing's deflection equals the moment about its axis divided by its stiffness.
   const Eigen::Vector4d q = sim.elasticPositions(), tau = sim.elasticExternalTorque();
   for (int e = 0; e < 4; ++e) {
@@ -56,7 +56,7 @@ TEST(Sim, StandsTenSecondsInHalfSittingWithStaticsHolding) {
   const double kz = model().description().bushing_vertical_stiffness;
   ASSERT_GT(kz, 0.0);
   for (int f = 0; f < 2; ++f) {
-    const double fz = sim.contacts().foot_wrench[static_cast<std::size_t>(f)](5);
+    const double fz = sim.contacts().foot_wrench[static_cast<std::size_t>(f)].force.z();
     const double link_z = sim.framePose(f == 0 ? "right_sole" : "left_sole").translation().z();
     EXPECT_GT(fz / kz, 5e-4) << "foot " << f << ": a millimetre, not nothing";
     EXPECT_NEAR(-link_z, fz / kz, 5e-5 + 0.02 * fz / kz) << "foot " << f;
@@ -78,10 +78,10 @@ namespace {
 /// Runs `seconds` holding the initial posture; returns the ground reaction and the CoM averaged
 /// over the last 1.6 s (about one period of the lightly damped sway on the bushings, so that the
 /// inertial part of the ZMP averages out).
-std::pair<overstep::core::Vector6d, Eigen::Vector3d> holdAndMeasure(overstep::sim::Simulator& sim,
-                                                                    double seconds) {
+std::pair<overstep::core::Wrench, Eigen::Vector3d> holdAndMeasure(overstep::sim::Simulator& sim,
+                                                                  double seconds) {
   const auto st0 = sim.state();
-  overstep::core::Vector6d sum = overstep::core::Vector6d::Zero();
+  auto sum = overstep::core::Wrench::zero(overstep::core::Axes::kWorld);
   Eigen::Vector3d com = Eigen::Vector3d::Zero();
   int n = 0;
   const int steps = static_cast<int>(seconds / 0.001);
@@ -103,13 +103,15 @@ TEST(SimTruth, PayloadAddsItsWeightAndMomentAndBiasIsAConstantOffset) {
   auto clean = overstep::sim::noTruthEffects(model());
   auto loaded = clean;
   loaded.payloads.push_back({"CHEST_LINK1", 3.0, Eigen::Vector3d(0.05, 0.0, 0.1)});
-  loaded.ft[1].bias << 1.0, -2.0, 3.0, 0.1, -0.2, 0.3;
+  loaded.ft[1].bias.force << 1.0, -2.0, 3.0;
+  loaded.ft[1].bias.moment << 0.1, -0.2, 0.3;
   overstep::sim::Simulator a(model(), clean), b(model(), loaded);
   const double g = model().description().gravity;
   const auto [Wa, ca] = holdAndMeasure(a, 4.0);
   const auto [Wb, cb] = holdAndMeasure(b, 4.0);
   EXPECT_NEAR(b.totalMass() - a.totalMass(), 3.0, 1e-12);
-  EXPECT_NEAR(Wb(5) - Wa(5), 3.0 * g, 0.01 * 3.0 * g) << "+m g on the summed normal force";
+  EXPECT_NEAR(Wb.force.z() - Wa.force.z(), 3.0 * g, 0.01 * 3.0 * g)
+      << "+m g on the summed normal force";
   // The matching moment: the support moment about the world origin follows the new CoM.
   const Eigen::Vector2d za = overstep::core::zmpFromWrench(Wa),
                         zb = overstep::core::zmpFromWrench(Wb);
@@ -119,12 +121,13 @@ TEST(SimTruth, PayloadAddsItsWeightAndMomentAndBiasIsAConstantOffset) {
   // Bias: the left sensor reads the clean reading of the same state plus the bias. Same robot,
   // same state: compare the bias-free right sensor as a control.
   auto loaded_no_bias = loaded;
-  loaded_no_bias.ft[1].bias.setZero();
+  loaded_no_bias.ft[1].bias = overstep::core::Wrench::zero(overstep::core::Axes::kSensor);
   overstep::sim::Simulator c(model(), loaded_no_bias);
   holdAndMeasure(c, 4.0);
   const auto sb = b.state(), sc = c.state();
-  EXPECT_LT((sb.ft_left - sc.ft_left - loaded.ft[1].bias).norm(), 1e-9);
-  EXPECT_LT((sb.ft_right - sc.ft_right).norm(), 1e-9) << "lockstep runs are bit-identical";
+  EXPECT_LT(((sb.ft_left - sc.ft_left - loaded.ft[1].bias).forceMoment()).norm(), 1e-9);
+  EXPECT_LT(((sb.ft_right - sc.ft_right).forceMoment()).norm(), 1e-9)
+      << "lockstep runs are bit-identical";
 }
 
 namespace {
@@ -238,7 +241,7 @@ TEST(SimObstacle, StandingClearOfTheBarAndAnOverlappingBarIsDetected) {
   EXPECT_GT(c.obstacle_distance, 0.0);
   EXPECT_LT(c.obstacle_distance, 0.03) << "the nearest capsule is a foot, less than the gap away";
   EXPECT_GT(c.ground_clearance, 0.0) << "only the feet touch the ground";
-  EXPECT_FALSE(clear.contacts().foot_wrench[0].hasNaN());
+  EXPECT_TRUE(clear.contacts().foot_wrench[0].allFinite());
   // A round bar whose margin reaches back over the toes (detection only, no physical body).
   o.obstacle.shape = overstep::core::ObstacleSpec::Shape::Cylinder;
   o.obstacle.gap = 0.0;
@@ -304,7 +307,7 @@ TEST(Sim, BushingDamperStaysStableThroughSwingAndHardTouchdown) {
     lifted = lifted || !sim.contacts().foot_contact[0];
     if (lifted && t > 0.45 && sim.contacts().foot_contact[0]) {
       landed = true;
-      peak_force = std::max(peak_force, sim.contacts().foot_wrench[0](5));
+      peak_force = std::max(peak_force, sim.contacts().foot_wrench[0].force.z());
     }
   }
   EXPECT_TRUE(lifted) << "the right foot left the ground";

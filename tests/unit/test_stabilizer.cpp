@@ -271,8 +271,9 @@ TEST(StabilizerDistributor, DoubleSupportSplitsExactlyWithCopsInsideTheSoles) {
                                         margin, min_force, pref);
     // Each CoP inside its shrunk sole.
     for (std::size_t f = 0; f < 2; ++f) {
-      EXPECT_GE(d.wrench[f](5), min_force - 1e-9) << "minimum normal force in double support";
-      if (d.wrench[f](5) < 1e-9) continue;  // unloaded foot: no CoP
+      EXPECT_GE(d.wrench[f].force.z(), min_force - 1e-9)
+          << "minimum normal force in double support";
+      if (d.wrench[f].force.z() < 1e-9) continue;  // unloaded foot: no CoP
       const Eigen::Vector2d cop = overstep::core::localCop(d.wrench[f]);
       EXPECT_GE(cop.x(), sole.x_min + margin - 1e-9);
       EXPECT_LE(cop.x(), sole.x_max - margin + 1e-9);
@@ -281,15 +282,14 @@ TEST(StabilizerDistributor, DoubleSupportSplitsExactlyWithCopsInsideTheSoles) {
     }
     // The wrenches sum to the desired one: total force, vertical moment, no horizontal moment
     // about the realised ZMP.
-    overstep::core::Vector6d sum = overstep::core::Vector6d::Zero();
     const Eigen::Vector3d P(d.zmp.x(), d.zmp.y(), 0.0);
+    overstep::core::Wrench sum = overstep::core::Wrench::zero(overstep::core::Axes::kWorld, P);
     for (std::size_t f = 0; f < 2; ++f)
-      sum += overstep::core::shiftWrench(overstep::core::transformWrench(feet[f], d.wrench[f]),
-                                         Eigen::Vector3d::Zero(), P);
-    EXPECT_LT((sum.tail<3>() - force).norm(), 1e-8);
-    EXPECT_NEAR(sum(0), 0.0, 1e-6);
-    EXPECT_NEAR(sum(1), 0.0, 1e-6);
-    EXPECT_NEAR(sum(2), 1.5, 1e-8);
+      sum += d.wrench[f].expressedIn(feet[f], overstep::core::Axes::kWorld);
+    EXPECT_LT((sum.force - force).norm(), 1e-8);
+    EXPECT_NEAR(sum.moment.x(), 0.0, 1e-6);
+    EXPECT_NEAR(sum.moment.y(), 0.0, 1e-6);
+    EXPECT_NEAR(sum.moment.z(), 1.5, 1e-8);
     // Without a minimum force the realisable set is the hull of the soles: requests inside it
     // are realised exactly, others go to the closest point of the hull.
     if (min_force > 0.0) {
@@ -324,7 +324,7 @@ TEST(StabilizerDistributor, PreferredShareIsKeptWhenTheZmpAllowsIt) {
     const auto d = st::distributeWrench(zmp, force, 0.0, {{true, true}}, feet, {{sole, sole}},
                                         0.005, 15.0, pref);
     EXPECT_NEAR(d.alpha, pref, 1e-9);
-    EXPECT_NEAR(d.wrench[0](5), pref * force.z(), 1e-6);
+    EXPECT_NEAR(d.wrench[0].force.z(), pref * force.z(), 1e-6);
   }
   // Far in front of the right toe: the share must move to the right foot.
   const auto d = st::distributeWrench(Eigen::Vector2d(0.12, -0.11), force, 0.0, {{true, true}},
@@ -453,8 +453,8 @@ std::vector<double> landOnPlant(double landing_damping, double ground) {
   st::Stabilizer s(p);
   st::Reference ref = overstep::test::staticReference(Eigen::Vector2d(0.0, 0.1), feet);
   ref.foot[0].contact = false;
-  ref.foot[0].wrench.setZero();
-  ref.foot[1].wrench(5) = kMass * kG;
+  ref.foot[0].wrench = overstep::core::Wrench::zero(overstep::core::Axes::kSole);
+  ref.foot[1].wrench.force.z() = kMass * kG;
   bringOn(s, ref, 1);
   const double k = 2e5, c = 2e3, tau = 0.01, mg = kMass * kG;
   double z = 0.05, zd = 0.0, force = 0.0;
@@ -464,17 +464,17 @@ std::vector<double> landOnPlant(double landing_damping, double ground) {
     const double t = i * kDt;
     const double sp = std::min(t / 0.5, 1.0), load = std::clamp((t - 0.5) / 0.3, 0.0, 1.0);
     ref.foot[0].contact = t >= 0.5;
-    ref.foot[0].wrench(5) = 0.5 * mg * load;
-    ref.foot[1].wrench(5) = mg - ref.foot[0].wrench(5);
+    ref.foot[0].wrench.force.z() = 0.5 * mg * load;
+    ref.foot[1].wrench.force.z() = mg - ref.foot[0].wrench.force.z();
     ref.zmp = Eigen::Vector2d(0.0, 0.1 - 0.1 * load);
     ref.com.head<2>() = ref.zmp;
     s.setReference(ref);
     st::Measurement m =
         overstep::test::measurementWithZmp(ref.com, Eigen::Vector3d::Zero(), ref.zmp, feet, 1);
-    m.foot_wrench[0].setZero();
-    m.foot_wrench[0](5) = force;
-    m.foot_wrench[1].setZero();
-    m.foot_wrench[1](5) = mg - force;
+    m.foot_wrench[0] = overstep::core::Wrench::zero(overstep::core::Axes::kSole);
+    m.foot_wrench[0].force.z() = force;
+    m.foot_wrench[1] = overstep::core::Wrench::zero(overstep::core::Axes::kSole);
+    m.foot_wrench[1].force.z() = mg - force;
     s.step(m, kDt, out);
     const double target = 0.05 * std::pow(1.0 - sp, 3) + out.foot_height[0];
     for (int j = 0; j < 10; ++j) {  // the plant at 2 kHz
@@ -529,13 +529,13 @@ TEST(StabilizerLanding, TheOffsetFollowsTheLaw) {
       overstep::test::measurementWithZmp(ref.com, Eigen::Vector3d::Zero(), ref.zmp, feet, 1);
   st::Output out;
   // Early: 200 N on the right sole while the reference swings it.
-  m.foot_wrench[0](5) = 200.0;
+  m.foot_wrench[0].force.z() = 200.0;
   s.step(m, kDt, out);
   EXPECT_NEAR(out.landing_height[0], 200.0 / 4000.0 * kDt, 1e-9);
   EXPECT_EQ(out.landing_height[1], 0.0) << "the stance foot is left alone";
   EXPECT_EQ(out.foot_height[0], out.landing_height[0]) << "force difference control is off";
   // Back in the air, then the touchdown of the reference with nothing under the sole.
-  m.foot_wrench[0](5) = 0.0;
+  m.foot_wrench[0].force.z() = 0.0;
   for (int i = 0; i < 40; ++i) s.step(m, kDt, out);
   ref.foot[0].contact = true;
   s.setReference(ref);
@@ -548,7 +548,7 @@ TEST(StabilizerLanding, TheOffsetFollowsTheLaw) {
   }
   EXPECT_LT(out.landing_height[0], 0.0);
   // Contact: the lowering stops and the offset returns toward zero.
-  m.foot_wrench[0](5) = 100.0;
+  m.foot_wrench[0].force.z() = 100.0;
   s.step(m, kDt, out);
   const double after = out.landing_height[0];
   s.step(m, kDt, out);
@@ -558,7 +558,7 @@ TEST(StabilizerLanding, TheOffsetFollowsTheLaw) {
   st::Stabilizer off(p);
   ref.foot[0].contact = false;
   bringOn(off, ref, 1);
-  m.foot_wrench[0](5) = 200.0;
+  m.foot_wrench[0].force.z() = 200.0;
   for (int i = 0; i < 10; ++i) off.step(m, kDt, out);
   EXPECT_EQ(out.landing_height[0], 0.0);
 }
@@ -608,7 +608,7 @@ TEST(StabilizerFaults, NanInputGivesAFaultAndHoldsTheLastOutput) {
   for (int i = 0; i < 50; ++i) s.step(m, kDt, out);
   const st::Output before = out;
   st::Measurement bad = m;
-  bad.foot_wrench[1](3) = std::numeric_limits<double>::quiet_NaN();
+  bad.foot_wrench[1].force.x() = std::numeric_limits<double>::quiet_NaN();
   st::Status stt = s.step(bad, kDt, out);
   EXPECT_EQ(stt.fault, st::Fault::NonFiniteMeasurement);
   EXPECT_EQ(stt.mode, st::Mode::Hold);

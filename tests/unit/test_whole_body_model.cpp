@@ -118,11 +118,13 @@ TEST_F(Hrp2Model, StaticsZmpIsComProjectionAndForceIsWeight) {
   const int n = model_->dofs();
   model_->setState(model_->halfSitting(), VectorXd::Zero(n), VectorXd::Zero(n));
   const VectorXd tau = model_->inverseDynamics();
-  const Vector6d w = model_->contactWrenchFromBase(tau);
+  const core::Wrench w = model_->contactWrenchFromBase(tau);
+  EXPECT_EQ(w.axes, core::Axes::kWorld);
+  EXPECT_TRUE(w.point.isZero(0.0));
   const double weight = model_->totalMass() * model_->description().gravity;
-  EXPECT_NEAR(w(5), weight, 1e-9 * weight);  // the feet's wrench sum carries the weight
-  EXPECT_NEAR(w(3), 0.0, 1e-9);
-  EXPECT_NEAR(w(4), 0.0, 1e-9);
+  EXPECT_NEAR(w.force.z(), weight, 1e-9 * weight);  // the feet's wrench sum carries the weight
+  EXPECT_NEAR(w.force.x(), 0.0, 1e-9);
+  EXPECT_NEAR(w.force.y(), 0.0, 1e-9);
   const Eigen::Vector3d c = model_->com();
   const Eigen::Vector2d zmp = model_->zmpFromMotion();
   EXPECT_NEAR(zmp.x(), c.x(), 1e-10);
@@ -195,14 +197,13 @@ TEST_F(Hrp2Model, MomentumRateEqualsContactWrenchPlusGravity) {
   };
   const Vector6d rate = (momentumAt(dt) - momentumAt(-dt)) / (2 * dt);
   model_->setState(q, v, a);
-  const Vector6d w_O = model_->contactWrenchFromBase(model_->inverseDynamics());
-  const Eigen::Vector3d c = model_->com();
-  const Vector6d w_c = core::shiftWrench(w_O, Eigen::Vector3d::Zero(), c);
+  const core::Wrench w_O = model_->contactWrenchFromBase(model_->inverseDynamics());
+  const core::Wrench w_c = w_O.about(model_->com());
   const double mg = model_->totalMass() * model_->description().gravity;
-  Eigen::Vector3d force = w_c.tail<3>();
+  Eigen::Vector3d force = w_c.force;
   force.z() -= mg;
   EXPECT_LT((rate.head<3>() - force).norm(), 1e-4 * (1 + force.norm()));
-  EXPECT_LT((rate.tail<3>() - w_c.head<3>()).norm(), 1e-4 * (1 + w_c.head<3>().norm()));
+  EXPECT_LT((rate.tail<3>() - w_c.moment).norm(), 1e-4 * (1 + w_c.moment.norm()));
 }
 
 TEST_F(Hrp2Model, ComJacobianMatchesFiniteDifferences) {
@@ -375,7 +376,9 @@ TEST(TwoLink, ActuatorTorqueWithItsTipOnASupportInClosedForm) {
     const double Fx = 20.0 * u(rng), Fz = 30.0 + 10.0 * u(rng), My = 2.0 * u(rng);
     FrameWrench w;
     w.frame = tip;
-    w.wrench << 0.0, My, 0.0, Fx, 0.0, Fz;  // [torque; force] about the tip, world axes
+    m.setState(q, Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero());
+    w.wrench = core::Wrench({Fx, 0.0, Fz}, {0.0, My, 0.0}, m.framePose(tip).translation(),
+                            core::Axes::kWorld);
     const Eigen::VectorXd tau = m.torquesInContact(m.inverseDynamics(), {w});
     // A rotation q about +y turns a link along +x to (cos q, 0, -sin q).
     const double t1 = q(0), t2 = q(0) + q(1);

@@ -62,6 +62,16 @@ bool sizes(int n, int expected, std::size_t a, std::size_t b, std::size_t c, std
   return true;
 }
 
+/// A sensor wrench about the sensor origin to the message's [Fx Fy Fz Mx My Mz], and back.
+void wrenchOut(const core::Wrench& w, double (&out)[6]) {
+  const core::Vector6d fm = w.about(Eigen::Vector3d::Zero()).forceMoment();
+  for (int i = 0; i < 6; ++i) out[i] = fm(i);
+}
+
+core::Wrench wrenchIn(const double (&in)[6]) {
+  return core::Wrench::fromForceMoment(Eigen::Map<const core::Vector6d>(in), core::Axes::kSensor);
+}
+
 }  // namespace
 
 bool decodeChecked(const void* data, int size, overstep::robot_command_t& out, std::string* why) {
@@ -110,10 +120,8 @@ void toLcm(const core::RobotState& in, overstep::robot_state_t& out) {
   copyOut(in.q, out.q);
   copyOut(in.qd, out.qd);
   copyOut(in.tau, out.tau);
-  for (int i = 0; i < 6; ++i) {
-    out.ft_right[i] = in.ft_right(i);
-    out.ft_left[i] = in.ft_left(i);
-  }
+  wrenchOut(in.ft_right, out.ft_right);
+  wrenchOut(in.ft_left, out.ft_left);
   const Eigen::Quaterniond& qi = in.imu_orientation;
   out.imu_quaternion[0] = qi.w();
   out.imu_quaternion[1] = qi.x();
@@ -153,10 +161,8 @@ bool fromLcm(const overstep::robot_state_t& in, int expected_joints, core::Robot
   out.q = Eigen::Map<const Eigen::VectorXd>(in.q.data(), in.num_joints);
   out.qd = Eigen::Map<const Eigen::VectorXd>(in.qd.data(), in.num_joints);
   out.tau = Eigen::Map<const Eigen::VectorXd>(in.tau.data(), in.num_joints);
-  for (int i = 0; i < 6; ++i) {
-    out.ft_right(i) = in.ft_right[i];
-    out.ft_left(i) = in.ft_left[i];
-  }
+  out.ft_right = wrenchIn(in.ft_right);
+  out.ft_left = wrenchIn(in.ft_left);
   out.imu_orientation = qi.normalized();
   for (int i = 0; i < 3; ++i) {
     out.imu_angular_velocity(i) = in.imu_angular_velocity[i];

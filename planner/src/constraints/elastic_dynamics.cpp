@@ -22,7 +22,7 @@ class ElasticDynamics final : public SampleTerm {
       for (int k = 0; k < 2; ++k) {
         const int c = p.flex_coord[static_cast<std::size_t>(2 * f + k)];
         double res = st.tau(c);
-        if (f == stance) res -= J.col(c).dot(st.wrench[f]);
+        if (f == stance) res -= J.col(c).dot(st.wrench[f].spatial());
         out[e++] = res / kFlexTorqueScale;
       }
     }

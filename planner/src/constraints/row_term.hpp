@@ -67,8 +67,8 @@ class EventTerm {
 /// The sole frame's wrench of foot f: moment and force about the sole origin, sole axes.
 inline void soleWrench(const State& st, int f, Eigen::Vector3d& mo, Eigen::Vector3d& fo) {
   const Eigen::Matrix3d Rt = st.sole[f].linear().transpose();
-  mo = Rt * st.wrench[f].head<3>();
-  fo = Rt * st.wrench[f].tail<3>();
+  mo = Rt * st.wrench[f].moment;
+  fo = Rt * st.wrench[f].force;
 }
 
 // One factory per term (its file).

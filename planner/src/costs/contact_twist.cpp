@@ -12,7 +12,7 @@ class ContactTwist final : public SampleCost {
     double sum = 0.0;
     for (int f = 0; f < 2; ++f) {
       if (!st.contact[f]) continue;
-      const double mz = (st.sole[f].linear().transpose() * st.wrench[f].head<3>()).z();
+      const double mz = (st.sole[f].linear().transpose() * st.wrench[f].moment).z();
       sum += (mz / 5.0) * (mz / 5.0);
     }
     return sum;

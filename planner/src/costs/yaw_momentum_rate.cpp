@@ -10,8 +10,8 @@ class YawMomentumRate final : public SampleCost {
   const char* name() const override { return "ang_mom_z_rate"; }
   double value(const ProblemModel&, const SampleData& d) const override {
     const Eigen::Vector3d com = d.model->com();
-    const core::Vector6d Wc = core::shiftWrench(d.st->W_O, Eigen::Vector3d::Zero(), com);
-    return (Wc(2) / 10.0) * (Wc(2) / 10.0);
+    const core::Wrench Wc = d.st->W_O.about(com);
+    return (Wc.moment.z() / 10.0) * (Wc.moment.z() / 10.0);
   }
 };
 

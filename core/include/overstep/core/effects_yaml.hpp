@@ -23,8 +23,8 @@ std::vector<PayloadDescription> parsePayloads(const YAML::Node& list, const Yaml
 /// `command: {delay, lag}` in s (0 .. 1); keys that are absent leave the values as they are.
 void parseCommandTiming(const YAML::Node& map, const YamlReader& r, double& delay, double& lag);
 /// `ft_sensor: {right|left: {bias: [6], scale}}`; absent keys leave the values as they are.
+/// The bias is [F; M] in the sensor frame, N and N m.
 void parseForceSensors(const YAML::Node& map, const YamlReader& r,
-                       std::array<Eigen::Matrix<double, 6, 1>, 2>& bias,
-                       std::array<double, 2>& scale);
+                       std::array<ForceSensorModel, 2>& sensors);
 
 }  // namespace overstep::core

@@ -2,15 +2,17 @@
 /// \file
 /// The plan: the planner -> runtime / checker contract, and its file format (JSON, versioned,
 /// documented in docs/plan-format.md). Samples are dense at `rate` Hz from t = 0 to the duration.
-/// Coordinates follow the robot's model order [base 6 | actuated | elastic]. Wrenches here are
-/// [torque; force] about the sole-frame origin, expressed in the world frame (the file stores
-/// them force first, [fx fy fz mx my mz], like the sensors).
+/// Coordinates follow the robot's model order [base 6 | actuated | elastic]. The planned contact
+/// wrenches are read and written as core::Wrench (world axes, about each sole origin) through
+/// Plan::wrench() and Plan::setWrench(); the file stores them force first, [fx fy fz mx my mz],
+/// like the sensors.
 
 #include <Eigen/Core>
 #include <string>
 #include <vector>
 
 #include "overstep/core/obstacle.hpp"
+#include "overstep/core/wrench.hpp"
 
 namespace overstep::core {
 
@@ -54,10 +56,18 @@ struct Plan {
   Eigen::MatrixXd zmp_tablecart;  ///< 2 x N, m
   Eigen::MatrixXd right_foot;     ///< 7 x N sole-frame pose [x y z qw qx qy qz]
   Eigen::MatrixXd left_foot;      ///< 7 x N
-  Eigen::MatrixXd right_wrench;   ///< 6 x N [torque; force] about the sole origin, world frame
-  Eigen::MatrixXd left_wrench;    ///< 6 x N
+  /// 6 x N spatial columns [moment; force] (world axes, about the sole origin): the storage
+  /// behind wrench() and setWrench().
+  Eigen::MatrixXd right_wrench;
+  Eigen::MatrixXd left_wrench;  ///< 6 x N, as right_wrench
 
   int samples() const { return static_cast<int>(t.size()); }
+  /// Foot `foot`'s (0 right, 1 left) planned contact wrench at sample k: world axes, about the
+  /// foot's sole origin at that sample.
+  Wrench wrench(int foot, int k) const;
+  /// Sets it (any reference point; stored about the sole origin of sample k, so set the feet's
+  /// poses first).
+  void setWrench(int foot, int k, const Wrench& w);
   /// The sample nearest to time `t` (clamped to the plan). The samples are not evenly spaced: a
   /// phase switch adds its own time off the grid, once per phase (1 us apart), so round(t * rate)
   /// falls behind by two or three samples per switch. At a switch the sample of `phase` is taken

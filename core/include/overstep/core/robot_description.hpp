@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "overstep/core/wrench.hpp"
+
 namespace overstep::core {
 
 /// One actuated (position-servoed) joint. Angles in rad.
@@ -109,21 +111,16 @@ struct ModelEffects {
   Eigen::VectorXd backlash;          ///< per actuated joint, dead band width in rad (size 0: none)
   double command_delay = 0.0;        ///< s, from a command to its effect at the joints
   double command_lag = 0.0;          ///< s, first-order lag of the joint servos
-  /// Force sensors (right, left): measured = scale * true + bias ([F; M], sensor frame).
-  std::array<Eigen::Matrix<double, 6, 1>, 2> ft_bias{
-      {Eigen::Matrix<double, 6, 1>::Zero(), Eigen::Matrix<double, 6, 1>::Zero()}};
-  std::array<double, 2> ft_scale{{1.0, 1.0}};
+  std::array<ForceSensorModel, 2> ft;  ///< force sensors (right, left)
   bool empty() const {
     return payloads.empty() && (viscous.size() == 0 || viscous.isZero()) &&
            (coulomb.size() == 0 || coulomb.isZero()) &&
            (backlash.size() == 0 || backlash.isZero()) && command_delay == 0.0 &&
-           command_lag == 0.0 && ft_bias[0].isZero() && ft_bias[1].isZero() && ft_scale[0] == 1.0 &&
-           ft_scale[1] == 1.0;
+           command_lag == 0.0 && ft[0].isIdentity() && ft[1].isIdentity();
   }
   /// The true force-sensor wrench from a measured one (foot 0 right, 1 left).
-  Eigen::Matrix<double, 6, 1> calibrated(int foot, const Eigen::Matrix<double, 6, 1>& m) const {
-    const auto f = static_cast<std::size_t>(foot);
-    return (m - ft_bias[f]) / ft_scale[f];
+  Wrench calibrated(int foot, const Wrench& m) const {
+    return ft[static_cast<std::size_t>(foot)].calibrated(m);
   }
 };
 

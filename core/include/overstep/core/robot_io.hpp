@@ -30,11 +30,11 @@ struct RobotState {
   std::int64_t utime = 0;
   std::int64_t seq = 0;
   std::int64_t last_command_seq = -1;
-  Eigen::VectorXd q;                     ///< rad
-  Eigen::VectorXd qd;                    ///< rad/s
-  Eigen::VectorXd tau;                   ///< N m, measured (motor current) torque estimate
-  Vector6d ft_right = Vector6d::Zero();  ///< [F; M] in the right sensor frame (LCM order F then M)
-  Vector6d ft_left = Vector6d::Zero();
+  Eigen::VectorXd q;                              ///< rad
+  Eigen::VectorXd qd;                             ///< rad/s
+  Eigen::VectorXd tau;                            ///< N m, measured (motor current) torque estimate
+  Wrench ft_right = Wrench::zero(Axes::kSensor);  ///< right sensor, about its origin
+  Wrench ft_left = Wrench::zero(Axes::kSensor);   ///< left sensor, about its origin
   Eigen::Quaterniond imu_orientation = Eigen::Quaterniond::Identity();
   Eigen::Vector3d imu_angular_velocity = Eigen::Vector3d::Zero();
   Eigen::Vector3d imu_linear_acceleration = Eigen::Vector3d::Zero();

@@ -100,9 +100,8 @@ nlohmann::json fidelityJson(const Fidelity& f, const FidelityTargets& targets = 
 RunSeries runSeries(const std::string& plan_path, const std::string& log_path,
                     const std::string& robot_path);
 
-/// The local CoP [-My / Fz, Mx / Fz] of a sole-frame wrench [M; F] about the sole origin, m;
-/// NaN where Fz <= fz_min (N).
-Eigen::Vector2d localCop(const core::Vector6d& w_sole, double fz_min);
+/// The local CoP of a sole-axes wrench (core::localCop), m; NaN where Fz <= fz_min (N).
+Eigen::Vector2d loadedCop(const core::Wrench& w_sole, double fz_min);
 
 /// Zero-phase high-pass (2nd-order Butterworth, forward and backward) of a uniformly sampled
 /// signal: the chatter filter, exposed for its test.

@@ -34,11 +34,10 @@ using core::Vector6d;
 
 /// A contact constraint for the impact map: a point contact constrains the frame origin's linear
 /// velocity (3 rows); a flat contact constrains the frame's full spatial velocity (6 rows).
-/// A contact wrench acting on the robot at a frame: [torque; force] (N m, N) about the frame's
-/// origin, world axes (the plan file's convention for the feet).
+/// A contact wrench acting on the robot at a frame (world axes, any reference point).
 struct FrameWrench {
   int frame = -1;
-  Vector6d wrench = Vector6d::Zero();
+  core::Wrench wrench;
 };
 
 struct ContactConstraint {
@@ -149,8 +148,8 @@ class WholeBodyModel {
   Eigen::VectorXd torquesInContact(const Eigen::VectorXd& tau_id,
                                    const std::vector<FrameWrench>& contacts) const;
   /// Total contact wrench the motion requires, from the base rows of `tau` (as returned by
-  /// inverseDynamics()), about the world origin in the world frame. Floating base only.
-  Vector6d contactWrenchFromBase(const Eigen::VectorXd& tau) const;
+  /// inverseDynamics()): world axes, about the world origin. Floating base only.
+  core::Wrench contactWrenchFromBase(const Eigen::VectorXd& tau) const;
   /// Whole-body ZMP on z = ground_z from the motion (RNEA base rows).
   Eigen::Vector2d zmpFromMotion(double ground_z = 0.0) const;
   /// Table-cart (3D-LIPM) ZMP from the CoM and its acceleration.

@@ -87,8 +87,9 @@ class PlanTrack {
   void estimate(const TrackSample& s, const core::RobotState& st,
                 stabilizer::Measurement& out) const;
 
-  /// Sole-frame contact wrench [M; F] of foot f from its sensor reading (sensor frame [F; M]).
-  core::Vector6d soleWrench(int index, int f, const core::Vector6d& ft) const;
+  /// Foot f's contact wrench (sole axes, about the sole origin) at sample `index` from its sensor
+  /// reading (sensor axes, about the sensor origin), less the static weight below the sensor.
+  core::Wrench soleWrench(int index, int f, const core::Wrench& ft) const;
 
   /// Plans the move from the measured posture (actuated joints `q_now`) to the plan's first
   /// sample over `samples` points (a quintic time law): the base pose relative to the feet and
@@ -118,8 +119,8 @@ class PlanTrack {
   std::vector<std::array<bool, 2>> contact_;
   Eigen::MatrixXd q_, qd_;  ///< joints x N
   Eigen::MatrixXd com_, com_vel_, com_acc_, zmp_, zmp_vel_, zmp_wb_, zmp_wb_vel_;
-  Eigen::MatrixXd sole_pose_[2];  ///< 7 x N [x y z qw qx qy qz]
-  Eigen::MatrixXd wrench_[2];     ///< 6 x N [M; F] sole frame
+  Eigen::MatrixXd sole_pose_[2];         ///< 7 x N [x y z qw qx qy qz]
+  std::vector<core::Wrench> wrench_[2];  ///< N planned wrenches, sole axes about the origin
   Eigen::MatrixXd imu_quat_, imu_omega_, base_pos_;
   std::vector<Matrix6d> leg_inv_[2];      ///< (d sole twist / d leg joints)^-1, world-aligned
   Eigen::MatrixXd sole_from_base_[2];     ///< 3 x N, p_sole - p_base
@@ -130,8 +131,7 @@ class PlanTrack {
   double below_mass_[2] = {0.0, 0.0};
   double gravity_ = 9.81;
   /// Force-sensor calibration from a model overlay (bias and scale; identity without one).
-  std::array<core::Vector6d, 2> ft_bias_{{core::Vector6d::Zero(), core::Vector6d::Zero()}};
-  std::array<double, 2> ft_scale_{{1.0, 1.0}};
+  std::array<core::ForceSensorModel, 2> ft_{};
   std::unique_ptr<robots::WholeBodyModel> model_;  ///< for planMove (not used in the tick)
   Eigen::VectorXd q0_;                             ///< the plan's first sample (all coordinates)
   /// m, each sole's compression under the plan's first load (the bushings' vertical give, which

@@ -21,9 +21,9 @@ class SensorNoise {
       st.qd(j) += n(2e-3);
       st.tau(j) += n(0.5);
     }
-    for (core::Vector6d* w : {&st.ft_right, &st.ft_left}) {
-      for (int i = 0; i < 3; ++i) (*w)(i) += n(0.5);
-      for (int i = 3; i < 6; ++i) (*w)(i) += n(0.03);
+    for (core::Wrench* w : {&st.ft_right, &st.ft_left}) {
+      for (int i = 0; i < 3; ++i) w->force(i) += n(0.5);
+      for (int i = 0; i < 3; ++i) w->moment(i) += n(0.03);
     }
     for (int i = 0; i < 3; ++i) {
       st.imu_angular_velocity(i) += n(1e-3);

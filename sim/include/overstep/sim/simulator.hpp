@@ -56,8 +56,8 @@ struct CollisionStatus {
 
 /// Ground-truth contact summary of the last step.
 struct ContactInfo {
-  /// [torque; force] on each foot, world frame, about the world origin (ground reaction).
-  std::array<core::Vector6d, 2> foot_wrench{{core::Vector6d::Zero(), core::Vector6d::Zero()}};
+  /// Ground reaction on each foot, world axes, about the world origin.
+  std::array<core::Wrench, 2> foot_wrench{};
   std::array<bool, 2> foot_contact{{false, false}};
   int contact_points = 0;
 };
@@ -109,8 +109,9 @@ class Simulator {
   Eigen::Vector4d elasticExternalTorque() const;
 
  private:
-  /// Foot f's sensor wrench [F; M] in the sensor frame after the last step (before the filter).
-  core::Vector6d sensorWrench(int f) const;
+  /// Foot f's sensor wrench, sensor axes about its origin, after the last step (before the
+  /// filter).
+  core::Wrench sensorWrench(int f) const;
 
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -18,11 +18,6 @@ namespace overstep::sim {
 /// A point mass on a link (kg; offset m in the link frame), as in model overlays.
 using Payload = core::PayloadDescription;
 
-struct FtSensorEffect {
-  core::Vector6d bias = core::Vector6d::Zero();  ///< [F; M] in the sensor frame, N and N m
-  double scale = 1.0;                            ///< measured = scale * true + bias
-};
-
 /// A bent link: the joint that carries `link` sits rotated on its parent by `rotation`
 /// (rotation vector, rad): a kinematic error no identification candidate models.
 struct Bend {
@@ -40,9 +35,9 @@ struct TruthEffects {
   Eigen::VectorXd coulomb;   ///< N m, joint Coulomb friction
   Eigen::VectorXd backlash;  ///< rad, total dead band between motor and joint
   std::vector<Payload> payloads;
-  double command_delay = 0.0;          ///< s, pure delay of every command
-  double command_lag = 0.0;            ///< s, first-order lag time constant of the servo references
-  std::array<FtSensorEffect, 2> ft{};  ///< [right, left]
+  double command_delay = 0.0;  ///< s, pure delay of every command
+  double command_lag = 0.0;    ///< s, first-order lag time constant of the servo references
+  std::array<core::ForceSensorModel, 2> ft{};  ///< [right, left]
   std::vector<Bend> bends;
 
   /// True when nothing differs from the model.

@@ -35,8 +35,9 @@ struct Distribution {
   double alpha = 1.0;  ///< share of the normal force carried by the right foot (0..1)
   /// CoP of [right, left] in the world (x, y).
   std::array<Eigen::Vector2d, 2> cop_world{{Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()}};
-  /// [torque; force] about the sole origin, in the sole frame.
-  std::array<core::Vector6d, 2> wrench{{core::Vector6d::Zero(), core::Vector6d::Zero()}};
+  /// Sole axes, about the sole origin.
+  std::array<core::Wrench, 2> wrench{
+      {core::Wrench::zero(core::Axes::kSole), core::Wrench::zero(core::Axes::kSole)}};
   Eigen::Vector2d zmp{Eigen::Vector2d::Zero()};  ///< realised ZMP (force-weighted mean of the CoPs)
   double error = 0.0;    ///< |realised - requested ZMP|, m (0 when the request is reachable)
   bool clamped = false;  ///< the requested ZMP was outside what the soles can realise

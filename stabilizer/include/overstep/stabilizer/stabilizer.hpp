@@ -14,8 +14,8 @@
 ///     force error, so a foot that touches early yields and one that is late is lowered.
 ///  5. Body posture control from the IMU (torso roll and pitch).
 ///  6. Optional CoM admittance: CoM offset from the ZMP tracking error.
-/// Conventions: index 0 = right foot, 1 = left foot. Foot wrenches are [torque; force] about the
-/// sole-frame origin, expressed in the sole frame. Foot rotation corrections are roll (about the
+/// Conventions: index 0 = right foot, 1 = left foot. Foot wrenches (core::Wrench) are in the sole's
+/// axes about its origin. Foot rotation corrections are roll (about the
 /// sole x axis) and pitch (about y) applied to the sole's reference orientation: +pitch lowers the
 /// toes and moves the CoP forward, +roll lowers the right edge (-y) and moves the CoP to -y.
 
@@ -55,8 +55,8 @@ enum Saturation : std::uint32_t {
 
 struct FootReference {
   bool contact = true;
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  ///< sole frame in the world
-  core::Vector6d wrench = core::Vector6d::Zero();  ///< planned, about the sole origin, sole frame
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();       ///< sole frame in the world
+  core::Wrench wrench = core::Wrench::zero(core::Axes::kSole);  ///< planned, about the sole origin
 };
 
 /// One sample of the plan (world frame, ground plane z = ground_z).
@@ -78,7 +78,9 @@ struct Reference {
 struct Measurement {
   Eigen::Vector3d com = Eigen::Vector3d(0, 0, 0.8);  ///< estimated (encoders + IMU)
   Eigen::Vector3d com_vel = Eigen::Vector3d::Zero();
-  std::array<core::Vector6d, 2> foot_wrench{{core::Vector6d::Zero(), core::Vector6d::Zero()}};
+  /// Contact wrenches, sole axes about the sole origin.
+  std::array<core::Wrench, 2> foot_wrench{
+      {core::Wrench::zero(core::Axes::kSole), core::Wrench::zero(core::Axes::kSole)}};
   std::array<Eigen::Isometry3d, 2> foot_pose{
       {Eigen::Isometry3d::Identity(), Eigen::Isometry3d::Identity()}};  ///< measured soles
   Eigen::Quaterniond torso = Eigen::Quaterniond::Identity();            ///< IMU orientation (world)

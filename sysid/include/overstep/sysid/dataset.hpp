@@ -19,7 +19,7 @@ struct Record {
   Eigen::VectorXd q_ref, qd_ref;  ///< command
   Eigen::VectorXd q0;             ///< encoders when the command was computed (state k)
   Eigen::VectorXd q, qd, tau;     ///< state k+1
-  core::Vector6d ft[2];           ///< state k+1, [F; M] in each sensor frame
+  core::Wrench ft[2];             ///< state k+1, each sensor's reading (its axes, about its origin)
   Eigen::Quaterniond imu = Eigen::Quaterniond::Identity();  ///< state k+1, IMU orientation
   Eigen::Vector3d gyro = Eigen::Vector3d::Zero();           ///< state k+1, rad/s, IMU frame
   Eigen::Vector3d accel = Eigen::Vector3d::Zero();  ///< state k+1, specific force, IMU frame
