@@ -66,7 +66,10 @@ class EventTerm {
 
 /// The sole frame's wrench of foot f: moment and force about the sole origin, sole axes.
 inline void soleWrench(const State& st, int f, Eigen::Vector3d& mo, Eigen::Vector3d& fo) {
-  const Eigen::Matrix3d Rt = st.sole[f].linear().transpose();
+  // Rt from a plain matrix: GCC's -O1 flags the transpose of the isometry's block as maybe
+  // uninitialized (a false positive in Eigen's aliasing check).
+  const Eigen::Matrix3d R = st.sole[f].linear();
+  const Eigen::Matrix3d Rt = R.transpose();
   mo = Rt * st.wrench[f].moment;
   fo = Rt * st.wrench[f].force;
 }

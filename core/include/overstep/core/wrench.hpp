@@ -71,16 +71,15 @@ struct Wrench {
   /// force and moment rotated, the reference point mapped (the moment stays about the same
   /// physical point).
   Wrench expressedIn(const Eigen::Isometry3d& X_GF, Axes g) const {
-    const Eigen::Matrix3d& R_GF = X_GF.linear();
-    return {R_GF * force, R_GF * moment, X_GF * point, g};
+    return {X_GF.linear() * force, X_GF.linear() * moment, X_GF * point, g};
   }
 
   /// This wrench (in G's axes) about the origin of frame F and expressed in F's axes, where X_GF
   /// is F's pose in G: the world wrench a sole carries, in the sole frame about its origin.
   Wrench inFrame(const Eigen::Isometry3d& X_GF, Axes f) const {
     const Wrench w_Fo = about(X_GF.translation());
-    const Eigen::Matrix3d R_FG = X_GF.linear().transpose();
-    return {R_FG * w_Fo.force, R_FG * w_Fo.moment, Eigen::Vector3d::Zero(), f};
+    return {X_GF.linear().transpose() * w_Fo.force, X_GF.linear().transpose() * w_Fo.moment,
+            Eigen::Vector3d::Zero(), f};
   }
 
   bool allFinite() const { return force.allFinite() && moment.allFinite() && point.allFinite(); }
