@@ -420,6 +420,30 @@ TEST(Plan, SampleAtFindsEverySampleAcrossPhaseSwitches) {
   EXPECT_EQ(Plan{}.sampleAt(0.0), -1);
 }
 
+// The plan stores each foot's wrench about that foot's sole origin: one set about another point
+// reads back as the same physical wrench, about the sole origin.
+TEST(Plan, WrenchesAreReadAboutTheSoleOriginWhateverPointTheyWereSetAbout) {
+  Plan p = switchingPlan();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int k = 0; k < p.samples(); ++k)
+    for (Eigen::MatrixXd* pose : {&p.right_foot, &p.left_foot})
+      pose->col(k) << 0.3 * u(rng), 0.2 * u(rng), 0.01 * u(rng), 1.0, 0.0, 0.0, 0.0;
+  for (int k = 0; k < p.samples(); k += 7)
+    for (int f = 0; f < 2; ++f) {
+      const Eigen::Vector3d o = (f == 0 ? p.right_foot : p.left_foot).col(k).head<3>();
+      const Wrench w({20 * u(rng), 20 * u(rng), 300 + 100 * u(rng)}, {u(rng), u(rng), u(rng)},
+                     o + Eigen::Vector3d(0.05 * u(rng), 0.03 * u(rng), 0.0), Axes::kWorld);
+      p.setWrench(f, k, w);
+      const Wrench back = p.wrench(f, k);
+      EXPECT_EQ(back.axes, Axes::kWorld);
+      EXPECT_EQ(back.point, o);
+      EXPECT_EQ(back.force, w.force);
+      const Eigen::Vector3d q(0.1, -0.2, 0.7);  // any point: the same moment about it
+      EXPECT_LT((back.about(q).moment - w.about(q).moment).norm(), 1e-12) << k << " " << f;
+    }
+}
+
 // The bracket scan every JSON reader asks before parsing (nlohmann-json recurses).
 TEST(Json, DepthCountsBracketsOutsideStringsAndStopsPastTheCap) {
   EXPECT_EQ(core::jsonDepth("1", 8), 0);
