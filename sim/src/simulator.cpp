@@ -458,8 +458,7 @@ void Simulator::step() {
         w_W.force.z() < 0.1 * s.robot->getMass() * s.model.description().gravity)
       continue;
     const Eigen::Isometry3d X_WS = s.sole[fi]->getWorldTransform() * s.sole_in_foot[fi];
-    const core::Wrench w_S =
-        w_W.about(X_WS.translation()).expressedIn(X_WS.inverse(), core::Axes::kSole);
+    const core::Wrench w_S = w_W.inFrame(X_WS, core::Axes::kSole);
     if (w_S.force.z() <= 0.0) continue;
     const Eigen::Vector2d cop = core::localCop(w_S);
     const double cx = cop.x(), cy = cop.y(), margin = 0.005;
