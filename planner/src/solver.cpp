@@ -28,6 +28,13 @@ constexpr int kFeasibleBudget = 40;
 /// the default took 64 s instead of 74-77 s and the six perturbed bars 67-86 s instead of
 /// 79-88 s, all valid, at objectives a few per cent higher (default 2.55 instead of 2.30).
 constexpr int kIntermediateBudget = 8;
+/// kInfeasibleStall in the intermediate stages, scaled as their feasible budget is (8 of 40): an
+/// intermediate stage's solution only starts the next stage, and its polish, not more SLSQP
+/// iterations, takes a near-feasible best point to the tolerance. A run that wanders near its
+/// best point keeps that point whatever the iterations after it lower the objective to (one
+/// path of the bar 5 mm nearer: stage 4 at 0.014-0.04 for 80 iterations; with 16 the same plan
+/// 10 s sooner; the eight bars of docs/benchmarks.md are solved the same to the bit).
+constexpr int kIntermediateStall = 16;
 
 using Clock = std::chrono::steady_clock;
 
@@ -69,6 +76,7 @@ class NloptSolver final : public NlpSolver {
     s.D = D;
     s.max_iterations = max_iterations > 0 ? max_iterations : settings_.max_iterations;
     s.feasible_budget = problem.lastStage() ? kFeasibleBudget : kIntermediateBudget;
+    s.infeasible_stall = problem.lastStage() ? kInfeasibleStall : kIntermediateStall;
     {
       // The objective enters at O(1): SLSQP's line search and QP are sensitive to its scale.
       Evaluation e0;
@@ -160,6 +168,7 @@ class NloptSolver final : public NlpSolver {
     int feasible_count = 0;  // iterations since the best point became feasible
     double infeasible_reference = std::numeric_limits<double>::infinity();
     int infeasible_count = 0;
+    int infeasible_stall = kInfeasibleStall;
     bool stalled = false;
     Eigen::VectorXd last_iterate;
     Eigen::VectorXd best_x;
@@ -206,8 +215,8 @@ class NloptSolver final : public NlpSolver {
       } else if (s.best_violation < s.infeasible_reference * 0.99) {
         s.infeasible_reference = s.best_violation;
         s.infeasible_count = 0;
-      } else if (++s.infeasible_count >= kInfeasibleStall) {
-        // No point seen for kInfeasibleStall iterations comes 1 % nearer to feasibility: the
+      } else if (++s.infeasible_count >= s.infeasible_stall) {
+        // No point seen for infeasible_stall iterations comes 1 % nearer to feasibility: the
         // restoration steps after the stage do better from the best one (20 cm run, last stage:
         // SLSQP wandered at 0.9 for 280 iterations, 260 s, from a start at 0.023; measured).
         s.stalled = true;
