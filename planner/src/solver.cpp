@@ -28,12 +28,15 @@ constexpr int kFeasibleBudget = 40;
 /// the default took 64 s instead of 74-77 s and the six perturbed bars 67-86 s instead of
 /// 79-88 s, all valid, at objectives a few per cent higher (default 2.55 instead of 2.30).
 constexpr int kIntermediateBudget = 8;
-/// kInfeasibleStall in the intermediate stages, scaled as their feasible budget is (8 of 40): an
-/// intermediate stage's solution only starts the next stage, and its polish, not more SLSQP
-/// iterations, takes a near-feasible best point to the tolerance. A run that wanders near its
-/// best point keeps that point whatever the iterations after it lower the objective to (one
-/// path of the bar 5 mm nearer: stage 4 at 0.014-0.04 for 80 iterations; with 16 the same plan
-/// 10 s sooner; the eight bars of docs/benchmarks.md are solved the same to the bit).
+/// kInfeasibleStall in the intermediate stages, scaled as their feasible budget is (8 of 40), once
+/// SLSQP has found a point less violated than the stage's start: an intermediate stage's
+/// solution only starts the next stage, and its polish, not more SLSQP iterations, takes that
+/// best point to the tolerance; the iterations that lower the objective near it are not kept
+/// (one path of the bar 5 mm nearer: stage 4 at 0.014-0.04 for 80 iterations after its best
+/// point; with 16 the same plan 10 s sooner). While the best point is still the start, where the
+/// stage's projection stalled, the polish would stall there again, and SLSQP keeps the target
+/// stage's 80 (16 there sent another path of that bar to a bisection stage: 81.5 s against
+/// 70.4 s). The eight bars of docs/benchmarks.md are solved the same to the bit.
 constexpr int kIntermediateStall = 16;
 
 using Clock = std::chrono::steady_clock;
@@ -169,6 +172,7 @@ class NloptSolver final : public NlpSolver {
     double infeasible_reference = std::numeric_limits<double>::infinity();
     int infeasible_count = 0;
     int infeasible_stall = kInfeasibleStall;
+    int best_points = 0;  // times the best point changed, the start's evaluation included
     bool stalled = false;
     Eigen::VectorXd last_iterate;
     Eigen::VectorXd best_x;
@@ -191,6 +195,7 @@ class NloptSolver final : public NlpSolver {
         s.best_x = s.x;
         s.best_violation = v;
         s.best_objective = s.eval.objective;
+        ++s.best_points;
       }
     }
     if (need_grad && !s.have_derivs) {
@@ -215,7 +220,8 @@ class NloptSolver final : public NlpSolver {
       } else if (s.best_violation < s.infeasible_reference * 0.99) {
         s.infeasible_reference = s.best_violation;
         s.infeasible_count = 0;
-      } else if (++s.infeasible_count >= s.infeasible_stall) {
+      } else if (++s.infeasible_count >=
+                 (s.best_points > 1 ? s.infeasible_stall : kInfeasibleStall)) {
         // No point seen for infeasible_stall iterations comes 1 % nearer to feasibility: the
         // restoration steps after the stage do better from the best one (20 cm run, last stage:
         // SLSQP wandered at 0.9 for 280 iterations, 260 s, from a start at 0.023; measured).
