@@ -222,7 +222,8 @@ class NloptSolver final : public NlpSolver {
         s.infeasible_count = 0;
       } else if (++s.infeasible_count >=
                  (s.best_points > 1 ? s.infeasible_stall : kInfeasibleStall)) {
-        // No point seen for infeasible_stall iterations comes 1 % nearer to feasibility: the
+        // No point seen for that many iterations (kIntermediateStall or kInfeasibleStall, see
+        // there) comes 1 % nearer to feasibility: the
         // restoration steps after the stage do better from the best one (20 cm run, last stage:
         // SLSQP wandered at 0.9 for 280 iterations, 260 s, from a start at 0.023; measured).
         s.stalled = true;
