@@ -74,17 +74,63 @@ void OverstepProblem::Impl::sampleSensitivity(Workspace& w, int k, Sensitivity& 
   const SplineState S0 = splineState(w, base.t);
   const Eigen::Map<const Eigen::VectorXd> terms0(base.terms.data(), kObjectiveTerms);
   SampleOut out;
+  // The rows in closed form first (at the sample's own state), then the others by forward
+  // differences.
+  sampleRows(w, k, out, &S0);
+  std::vector<bool> exact(sample_terms.size(), false);
+  closedFormRows(w, k, d, exact);
   SplineState S;
   for (int i = 0; i < n; ++i) {
     const int row = i % 16;
     if (row < 12 && row / 6 == d.ik_leg) continue;  // set by the inverse kinematics
     const double h = perturbed(S0, i, S);
     sampleRows(w, k, out, &S);
-    d.ineq.col(i) = (out.ineq - base.ineq) / h;
-    d.eq.col(i) = (out.eq - base.eq) / h;
+    copyDifferences(k, out, base, h, i, exact, d);
     d.terms.col(i) =
         (Eigen::Map<const Eigen::VectorXd>(out.terms.data(), kObjectiveTerms) - terms0) / h;
     d.tau.col(i) = (out.tau - base.tau) / h;
+  }
+}
+
+void OverstepProblem::Impl::closedFormRows(Workspace& w, int k, Sensitivity& d,
+                                           std::vector<bool>& exact) const {
+  const GridPoint& g = grid[static_cast<std::size_t>(k)];
+  Eigen::MatrixXd T, J;
+  if (!configurationSensitivity(w, g.phase, T)) return;
+  int ri = 0, re = 0;
+  for (std::size_t ti = 0; ti < sample_terms.size(); ++ti) {
+    const SampleTerm& term = *sample_terms[ti];
+    const int rows = termRows(term, g);
+    if (rows == 0) continue;
+    int& r0 = term.equality() ? re : ri;
+    Eigen::MatrixXd& D = term.equality() ? d.eq : d.ineq;
+    J.setConstant(rows, T.rows(), std::numeric_limits<double>::quiet_NaN());
+    if (term.configurationJacobian(*this, w.sample, J)) {
+      D.block(r0, 0, rows, 16) = J * T;  // the values; velocities and accelerations move nothing
+      exact[ti] = true;
+    }
+    r0 += rows;
+  }
+}
+
+void OverstepProblem::Impl::copyDifferences(int k, const SampleOut& out, const SampleOut& base,
+                                            double h, int i, const std::vector<bool>& exact,
+                                            Sensitivity& d) const {
+  const GridPoint& g = grid[static_cast<std::size_t>(k)];
+  int ri = 0, re = 0;
+  for (std::size_t ti = 0; ti < sample_terms.size(); ++ti) {
+    const SampleTerm& term = *sample_terms[ti];
+    const int rows = termRows(term, g);
+    if (rows == 0) continue;
+    int& r0 = term.equality() ? re : ri;
+    if (!exact[ti]) {
+      if (term.equality())
+        d.eq.col(i).segment(r0, rows) = (out.eq.segment(r0, rows) - base.eq.segment(r0, rows)) / h;
+      else
+        d.ineq.col(i).segment(r0, rows) =
+            (out.ineq.segment(r0, rows) - base.ineq.segment(r0, rows)) / h;
+    }
+    r0 += rows;
   }
 }
 

@@ -305,6 +305,7 @@ struct OverstepProblem::Impl : ProblemModel {
     st.contact[kLeft] = ph.left_contact;
     st.ik_error = 0.0;
     st.reach = 0.0;
+    st.beyond_reach = false;
     st.ik_seed_gap = 0.0;
     if (ph.right_contact && ph.left_contact) {
       robots::Vector6d seed;
@@ -335,6 +336,41 @@ struct OverstepProblem::Impl : ProblemModel {
     for (int f = 0; f < 2; ++f)
       if (st.contact[f]) tau.noalias() -= st.J_sole[f].transpose() * st.wrench[f].spatial();
     st.tau_act = tau.segment(6, model_template.actuatedCount());
+  }
+
+  /// How the configuration built by buildState (at w's state) moves with the splines' 16 values
+  /// (SplineState rows: leg joints, then bushings): dv = T du, T dofs x 16, in the model's
+  /// velocity coordinates. Each value moves its own coordinate; the base follows so that the
+  /// anchor sole stays at its placement (J_a dv = 0), and in double support the inverse-
+  /// kinematics leg follows so that the other sole stays at its own (J_o dv = 0; the implicit-
+  /// function theorem through the leg Jacobian: that leg's own spline values move nothing).
+  /// False where the inverse kinematics is not exact (a target beyond reach, a singular leg):
+  /// the derivatives there are finite differences.
+  bool configurationSensitivity(const Workspace& w, int phase, Eigen::MatrixXd& T) const {
+    const State& st = w.st;
+    const int anchor = anchor_of[phase], other = 1 - anchor;
+    const bool ds = doubleSupport(phase);
+    if (ds && (st.beyond_reach || st.ik_error > 1e-9)) return false;
+    const Eigen::MatrixXd& Ja = st.J_sole[anchor];
+    const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> base(Ja.leftCols<6>());
+    Eigen::Matrix<double, 6, 6> Jl = Eigen::Matrix<double, 6, 6>::Identity();
+    if (ds)
+      for (int j = 0; j < 6; ++j)
+        Jl.col(j) = st.J_sole[other].col(leg_coord[static_cast<std::size_t>(6 * other + j)]);
+    const Eigen::PartialPivLU<Eigen::Matrix<double, 6, 6>> leg(Jl);
+    if (ds && leg.rcond() < 1e-10) return false;
+    T.setZero(w.model->dofs(), 16);
+    for (int i = 0; i < 16; ++i) {
+      if (ds && i < 12 && i / 6 == other) continue;  // set by the inverse kinematics
+      const int c = i < 12 ? leg_coord[static_cast<std::size_t>(i)]
+                           : flex_coord[static_cast<std::size_t>(i - 12)];
+      T(c, i) = 1.0;
+      T.col(i).head<6>() = -base.solve(Ja.col(c));
+      if (!ds) continue;
+      const core::Vector6d dl = -leg.solve(st.J_sole[other] * T.col(i));
+      for (int j = 0; j < 6; ++j) T(leg_coord[static_cast<std::size_t>(6 * other + j)], i) = dl(j);
+    }
+    return true;
   }
 
   /// st.J_sole of the feet in contact at the model's current positions.
@@ -398,6 +434,7 @@ struct OverstepProblem::Impl : ProblemModel {
     // keeps the row growing with it (without it, the reach row and the knee's joint-limit row
     // held constant there: a restoration stalled at the knee's 0.524 with no gradient).
     const double excess = ik.hip_ankle - leg_ik[leg]->maxReach();
+    st.beyond_reach = excess > 0.0;
     st.reach = excess > 0.0 ? stretched_reach[leg] + excess
                             : (m.framePose(ankle_frame[leg]).translation() -
                                m.framePose(hip_frame[leg]).translation())
@@ -877,6 +914,14 @@ struct OverstepProblem::Impl : ProblemModel {
     Eigen::VectorXd event;
   };
   void sampleSensitivity(Workspace& w, int k, Sensitivity& d) const;
+  /// The rows of sample k that its terms give in closed form (SampleTerm::configurationJacobian
+  /// through configurationSensitivity), into d's value columns; w at the sample's state. Marks
+  /// those terms in `exact` (sample_terms order).
+  void closedFormRows(Workspace& w, int k, Sensitivity& d, std::vector<bool>& exact) const;
+  /// Column i of d from the forward difference out - base (step h) for the rows not in closed
+  /// form.
+  void copyDifferences(int k, const SampleOut& out, const SampleOut& base, double h, int i,
+                       const std::vector<bool>& exact, Sensitivity& d) const;
   void eventSensitivity(Workspace& w, int e, Sensitivity& d) const;
   /// Column j of a phase duration or a foot placement, by a forward difference of the samples
   /// and switches it moves; leaves w decoded at x.

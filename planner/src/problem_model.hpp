@@ -109,8 +109,9 @@ struct State {
   Eigen::MatrixXd J_sole[2];
   core::Wrench W_O;  // total contact wrench, world axes about the world origin
   double ik_error = 0.0;
-  double reach = 0.0;       // hip-ankle distance of the IK leg
-  double ds_balance = 0.0;  // DS: unreachable ankle-moment balance about the feet's line, N m
+  double reach = 0.0;         // hip-ankle distance of the IK leg
+  bool beyond_reach = false;  // DS: the IK leg's target beyond its reach (reach continued)
+  double ds_balance = 0.0;    // DS: unreachable ankle-moment balance about the feet's line, N m
   /// Each foot's share factor in the double-support split (distributeWrench): 1, ramped for a
   /// foot that lifts off at the phase's end or touched down at its start (shareFactor).
   double share[2] = {1.0, 1.0};

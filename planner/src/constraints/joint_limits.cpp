@@ -23,6 +23,17 @@ class JointLimits final : public SampleTerm {
       out[2 * j + 1] = (aj.safeLower() - qj) / kJointScale;
     }
   }
+  bool configurationJacobian(const ProblemModel& p, const SampleData& d,
+                             Eigen::Ref<Eigen::MatrixXd> J) const override {
+    const int leg = 1 - p.anchor_of[d.g->phase];
+    J.setZero();
+    for (int j = 0; j < 6; ++j) {
+      const int c = p.leg_coord[static_cast<std::size_t>(6 * leg + j)];
+      J(2 * j, c) = 1.0 / kJointScale;
+      J(2 * j + 1, c) = -1.0 / kJointScale;
+    }
+    return true;
+  }
 };
 
 }  // namespace

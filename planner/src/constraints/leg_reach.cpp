@@ -15,6 +15,21 @@ class LegReach final : public SampleTerm {
   void evaluate(const ProblemModel& p, const SampleData& d, double* out) const override {
     out[0] = (d.st->reach - p.cfg.leg_reach) / kDistScale;
   }
+  // Within reach: the distance of the hip and ankle frames, n . (v_ankle - v_hip).
+  bool configurationJacobian(const ProblemModel& p, const SampleData& d,
+                             Eigen::Ref<Eigen::MatrixXd> J) const override {
+    if (d.st->beyond_reach) return false;
+    const int leg = 1 - p.anchor_of[d.g->phase];
+    const robots::WholeBodyModel& m = *d.model;
+    const Eigen::Vector3d r =
+        m.framePose(p.ankle_frame[leg]).translation() - m.framePose(p.hip_frame[leg]).translation();
+    const Eigen::Vector3d n = r / r.norm();
+    J.row(0) = n.transpose() *
+               (m.frameJacobian(p.ankle_frame[leg]).bottomRows<3>() -
+                m.frameJacobian(p.hip_frame[leg]).bottomRows<3>()) /
+               kDistScale;
+    return true;
+  }
 };
 
 }  // namespace

@@ -45,6 +45,18 @@ class SampleTerm {
   virtual int rows(const ProblemModel& p, const GridPoint& g) const = 0;
   /// Writes rows(p, *d.g) values to out.
   virtual void evaluate(const ProblemModel& p, const SampleData& d, double* out) const = 0;
+  /// For a term whose rows at this sample read the configuration alone: their exact derivatives
+  /// with respect to it, rows(p, *d.g) x dofs, in the model's velocity coordinates (the base's
+  /// six, then the joints: d row = J dv for a configuration moving by dv dt), and true. False
+  /// (J untouched) where the rows also read velocities, accelerations or wrenches, or have no
+  /// closed form at this state: the problem then differentiates the sample by finite differences.
+  virtual bool configurationJacobian(const ProblemModel& p, const SampleData& d,
+                                     Eigen::Ref<Eigen::MatrixXd> J) const {
+    (void)p;
+    (void)d;
+    (void)J;
+    return false;
+  }
 };
 
 /// What the row terms of a contact switch read: the state of the double-support phase at the

@@ -58,6 +58,28 @@ class SwingClearance final : public SampleTerm {
         out[r++] = (hmin - c.z()) / kDistScale;
       }
   }
+  // Between the switches a corner's height: z . (v_o + omega x (c - o)) for the sole frame's
+  // origin o; at them the rows read accelerations.
+  bool configurationJacobian(const ProblemModel& p, const SampleData& d,
+                             Eigen::Ref<Eigen::MatrixXd> J) const override {
+    if (d.g->s == 0.0 || d.g->s == 1.0) return false;
+    const State& st = *d.st;
+    const int sw = st.contact[kRight] ? kLeft : kRight;
+    const auto& sole = p.foot[sw].sole;
+    const double xs[2] = {sole.x_front, -sole.x_back};
+    const double ys[2] = {p.foot[sw].yMin(), p.foot[sw].yMax()};
+    const Eigen::MatrixXd Js = d.model->frameJacobian(p.sole_frame[sw]);
+    int r = 0;
+    for (double cx : xs)
+      for (double cy : ys) {
+        const Eigen::Vector3d rw = st.sole[sw].linear() * Eigen::Vector3d(cx, cy, 0.0);
+        // z . (omega x rw) = omega . (rw x z)
+        J.row(r++) =
+            -(Js.row(5) + rw.cross(Eigen::Vector3d::UnitZ()).transpose() * Js.topRows<3>()) /
+            kDistScale;
+      }
+    return true;
+  }
 };
 
 }  // namespace
