@@ -97,41 +97,26 @@ void OverstepProblem::Impl::closedFormRows(Workspace& w, int k, Sensitivity& d,
   const GridPoint& g = grid[static_cast<std::size_t>(k)];
   Eigen::MatrixXd T, J;
   if (!configurationSensitivity(w, g.phase, T)) return;
-  int ri = 0, re = 0;
-  for (std::size_t ti = 0; ti < sample_terms.size(); ++ti) {
-    const SampleTerm& term = *sample_terms[ti];
-    const int rows = termRows(term, g);
-    if (rows == 0) continue;
-    int& r0 = term.equality() ? re : ri;
-    Eigen::MatrixXd& D = term.equality() ? d.eq : d.ineq;
+  forEachTermBlock(g, [&](std::size_t ti, const SampleTerm& term, int r0, int rows) {
     J.setConstant(rows, T.rows(), std::numeric_limits<double>::quiet_NaN());
-    if (term.configurationJacobian(*this, w.sample, J)) {
-      D.block(r0, 0, rows, 16) = J * T;  // the values; velocities and accelerations move nothing
-      exact[ti] = true;
-    }
-    r0 += rows;
-  }
+    if (!term.configurationJacobian(*this, w.sample, J)) return;
+    // The values; velocities and accelerations move nothing.
+    (term.equality() ? d.eq : d.ineq).block(r0, 0, rows, 16) = J * T;
+    exact[ti] = true;
+  });
 }
 
 void OverstepProblem::Impl::copyDifferences(int k, const SampleOut& out, const SampleOut& base,
                                             double h, int i, const std::vector<bool>& exact,
                                             Sensitivity& d) const {
   const GridPoint& g = grid[static_cast<std::size_t>(k)];
-  int ri = 0, re = 0;
-  for (std::size_t ti = 0; ti < sample_terms.size(); ++ti) {
-    const SampleTerm& term = *sample_terms[ti];
-    const int rows = termRows(term, g);
-    if (rows == 0) continue;
-    int& r0 = term.equality() ? re : ri;
-    if (!exact[ti]) {
-      if (term.equality())
-        d.eq.col(i).segment(r0, rows) = (out.eq.segment(r0, rows) - base.eq.segment(r0, rows)) / h;
-      else
-        d.ineq.col(i).segment(r0, rows) =
-            (out.ineq.segment(r0, rows) - base.ineq.segment(r0, rows)) / h;
-    }
-    r0 += rows;
-  }
+  forEachTermBlock(g, [&](std::size_t ti, const SampleTerm& term, int r0, int rows) {
+    if (exact[ti]) return;
+    const bool eq = term.equality();
+    (eq ? d.eq : d.ineq).col(i).segment(r0, rows) = ((eq ? out.eq : out.ineq).segment(r0, rows) -
+                                                     (eq ? base.eq : base.ineq).segment(r0, rows)) /
+                                                    h;
+  });
 }
 
 void OverstepProblem::Impl::eventSensitivity(Workspace& w, int e, Sensitivity& d) const {

@@ -801,18 +801,9 @@ struct OverstepProblem::Impl : ProblemModel {
     sd.st = &st;
     worldCapsules(w, g.phase, sd);
     sd.com_acc = m.comAcceleration();
-    int ri = 0, re = 0;
-    for (const auto& term : sample_terms) {
-      const int n = termRows(*term, g);
-      if (n == 0) continue;
-      if (term->equality()) {
-        term->evaluate(*this, sd, out.eq.data() + re);
-        re += n;
-      } else {
-        term->evaluate(*this, sd, out.ineq.data() + ri);
-        ri += n;
-      }
-    }
+    forEachTermBlock(g, [&](std::size_t, const SampleTerm& term, int r0, int) {
+      term.evaluate(*this, sd, (term.equality() ? out.eq : out.ineq).data() + r0);
+    });
     // Sample costs (per unit time, normalised), each in the slot of its name.
     out.terms.fill(0.0);
     for (const auto& [slot, cost] : sample_costs)
@@ -867,6 +858,21 @@ struct OverstepProblem::Impl : ProblemModel {
   /// plan integrates the bushings between them (passive_polish), which the check verifies.
   int termRows(const SampleTerm& term, const GridPoint& g) const {
     return g.refinement && term.family() == Family::Dynamics ? 0 : term.rows(*this, g);
+  }
+  /// Calls f(ti, term, r0, rows) for each sample term with rows at g, in stacking order: ti its
+  /// index in sample_terms, r0 its first row among the sample's equality rows or inequality rows
+  /// (term.equality()).
+  template <class F>
+  void forEachTermBlock(const GridPoint& g, F&& f) const {
+    int ri = 0, re = 0;
+    for (std::size_t ti = 0; ti < sample_terms.size(); ++ti) {
+      const SampleTerm& term = *sample_terms[ti];
+      const int rows = termRows(term, g);
+      if (rows == 0) continue;
+      int& r0 = term.equality() ? re : ri;
+      f(ti, term, r0, rows);
+      r0 += rows;
+    }
   }
 
   /// Mesh refinement: each point joins the grid after the regular points (rows only, no
